@@ -1,0 +1,21 @@
+#pragma once
+// Basic types shared by every part of snl.
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+
+namespace snl {
+
+/// Index of a node inside one rank: owned nodes [0, n_owned), ghosts appended.
+using LocalId = std::int32_t;
+/// Index of a node in the whole network (sensor ids 0..n-1 of the file).
+using GlobalId = std::int64_t;
+
+/// Every user-facing failure (bad input, I/O error, invalid option) is an snl::Error.
+/// Its message is complete and meant to be printed as is.
+class Error : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+}  // namespace snl

@@ -1,0 +1,62 @@
+#include "snl/mpi_util.hpp"
+
+#include <algorithm>
+#include <climits>
+#include <limits>
+
+namespace snl {
+
+int comm_rank(MPI_Comm comm) {
+  int r = 0;
+  MPI_Comm_rank(comm, &r);
+  return r;
+}
+
+int comm_size(MPI_Comm comm) {
+  int s = 1;
+  MPI_Comm_size(comm, &s);
+  return s;
+}
+
+std::string bcast_string(MPI_Comm comm, const std::string& s, int root) {
+  long long len = static_cast<long long>(s.size());
+  MPI_Bcast(&len, 1, MPI_LONG_LONG, root, comm);
+  std::string out = comm_rank(comm) == root ? s : std::string(static_cast<std::size_t>(len), '\0');
+  if (len > 0) bcast_bytes(comm, out.data(), static_cast<std::size_t>(len), root);
+  return out;
+}
+
+void bcast_bytes(MPI_Comm comm, void* data, std::size_t bytes, int root) {
+  char* p = static_cast<char*>(data);
+  const std::size_t chunk = static_cast<std::size_t>(INT_MAX / 2);
+  while (bytes > 0) {
+    const std::size_t c = std::min(bytes, chunk);
+    MPI_Bcast(p, static_cast<int>(c), MPI_BYTE, root, comm);
+    p += c;
+    bytes -= c;
+  }
+}
+
+void agree_first(MPI_Comm comm, std::int64_t key, const std::string& local_error) {
+  struct {
+    long long key;
+    int rank;
+  } mine{}, best{};
+  const int rank = comm_rank(comm);
+  mine.key = local_error.empty() ? std::numeric_limits<long long>::max() : static_cast<long long>(key);
+  mine.rank = rank;
+  // MPI_MINLOC on (long long, int) is not a predefined pair type, so reduce in two steps.
+  long long min_key = 0;
+  MPI_Allreduce(&mine.key, &min_key, 1, MPI_LONG_LONG, MPI_MIN, comm);
+  if (min_key == std::numeric_limits<long long>::max()) return;
+  int cand = (mine.key == min_key) ? rank : INT_MAX;
+  MPI_Allreduce(&cand, &best.rank, 1, MPI_INT, MPI_MIN, comm);
+  const std::string msg = bcast_string(comm, local_error, best.rank);
+  throw Error(msg);
+}
+
+void agree(MPI_Comm comm, const std::string& local_error) {
+  agree_first(comm, comm_rank(comm), local_error);
+}
+
+}  // namespace snl
