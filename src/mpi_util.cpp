@@ -37,6 +37,43 @@ void bcast_bytes(MPI_Comm comm, void* data, std::size_t bytes, int root) {
   }
 }
 
+std::vector<std::int64_t> gather_to_root(MPI_Comm comm, const std::vector<std::int64_t>& mine, int root) {
+  const int size = comm_size(comm), rank = comm_rank(comm);
+  long long count = static_cast<long long>(mine.size());
+  std::vector<long long> counts(size);
+  MPI_Gather(&count, 1, MPI_LONG_LONG, counts.data(), 1, MPI_LONG_LONG, root, comm);
+  std::vector<std::int64_t> all;
+  constexpr long long kChunk = 1LL << 27;
+  if (rank == root) {
+    long long total = 0;
+    for (auto c : counts) total += c;
+    all.resize(static_cast<std::size_t>(total));
+    long long pos = 0;
+    for (int r = 0; r < size; ++r) {
+      if (r == root) {
+        std::copy(mine.begin(), mine.end(), all.begin() + pos);
+        pos += count;
+        continue;
+      }
+      for (long long left = counts[r]; left > 0;) {
+        const int c = static_cast<int>(std::min(left, kChunk));
+        MPI_Recv(all.data() + pos, c, MPI_INT64_T, r, 11, comm, MPI_STATUS_IGNORE);
+        pos += c;
+        left -= c;
+      }
+    }
+  } else {
+    long long pos = 0;
+    for (long long left = count; left > 0;) {
+      const int c = static_cast<int>(std::min(left, kChunk));
+      MPI_Send(mine.data() + pos, c, MPI_INT64_T, root, 11, comm);
+      pos += c;
+      left -= c;
+    }
+  }
+  return all;
+}
+
 void agree_first(MPI_Comm comm, std::int64_t key, const std::string& local_error) {
   struct {
     long long key;

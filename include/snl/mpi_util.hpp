@@ -40,6 +40,10 @@ void collective_try(MPI_Comm comm, F&& f) {
 /// Broadcast a string from root.
 std::string bcast_string(MPI_Comm comm, const std::string& s, int root = 0);
 
+/// Concatenation of every rank's vector on `root` (empty elsewhere), in rank
+/// order; counts may exceed INT_MAX in total.
+std::vector<std::int64_t> gather_to_root(MPI_Comm comm, const std::vector<std::int64_t>& mine, int root = 0);
+
 /// Large-count helpers (counts above INT_MAX are split into chunks).
 void bcast_bytes(MPI_Comm comm, void* data, std::size_t bytes, int root = 0);
 

@@ -1,0 +1,24 @@
+#pragma once
+// Reference twins: plain serial implementations of the kernels on a whole
+// network held by one process, written independently of the distributed code
+// (edge-list loops, no partitioning, no halo), for tests to compare against.
+#include <vector>
+
+#include "snl/network.hpp"
+
+namespace snl::reference {
+
+/// f(x) and f_hat(x) on a whole network (duplicates already merged).
+double ml_cost(const Network& net, const std::vector<double>& x);
+double relaxed_cost(const Network& net, const std::vector<double>& x);
+std::vector<double> relaxed_gradient(const Network& net, const std::vector<double>& x);
+/// 2 delta_max + max |A_i|.
+double relaxation_lipschitz(const Network& net);
+/// `iters` iterations of 003 Algorithm 1 from x0.
+std::vector<double> nesterov(const Network& net, const std::vector<double>& x0, int iters);
+/// `iters` iterations of 000 Algorithm 1 from x0; surrogate values after each
+/// iteration (index 0: at the start) go to *surrogate if non-null.
+std::vector<double> mm(const Network& net, const std::vector<double>& x0, int iters,
+                       std::vector<double>* surrogate = nullptr);
+
+}  // namespace snl::reference

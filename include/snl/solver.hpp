@@ -1,0 +1,145 @@
+#pragma once
+// Solver interface in the style of Ceres: an Options struct with in-class
+// defaults and validation, a Summary, iteration callbacks, and a small
+// Algorithm interface that every method (relaxation, MM, BB, ...) implements,
+// so the driver never changes when an algorithm is added.
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "snl/metrics.hpp"
+#include "snl/problem.hpp"
+
+namespace snl {
+
+enum class TerminationType {
+  kConvergence,    ///< a tolerance was met
+  kNoConvergence,  ///< max_iter reached
+  kUserAbort,      ///< a callback asked to stop
+  kSignal,         ///< SIGTERM/SIGUSR1 asked to stop (a checkpoint was written)
+  kFailure,        ///< numerical failure (non-finite iterate)
+};
+const char* to_string(TerminationType t);
+
+struct SolverOptions {
+  /// relaxation | mm | pipeline | bb
+  std::string algorithm = "pipeline";
+  /// Iterations per phase (the pipeline has two phases).
+  std::int64_t max_iter = 10000;
+  /// Relative improvement ||x(k) - x(k-1)|| / ||x(k)|| at or below which a
+  /// phase stops (003, Sec. V uses 1e-6). 0 disables it.
+  double tol = 1e-6;
+  /// Stop when the norm of the gradient the method computes falls to this
+  /// (the relaxation's grad f_hat at the extrapolated point). 0 disables it.
+  double grad_tol = 0.0;
+  /// Record history (and report progress) every this many iterations; 0: auto
+  /// (every iteration up to 2000, else about 1000 records per phase).
+  std::int64_t history_every = 0;
+  /// Consensus rounds per BB iteration (Calafiore et al. use 20).
+  int bb_rounds = 20;
+  /// Check after every iteration that the MM surrogate did not increase
+  /// (one extra reduction per iteration). On by default in debug builds.
+#ifdef NDEBUG
+  bool check_monotone = false;
+#else
+  bool check_monotone = true;
+#endif
+  std::uint64_t seed = 1;
+  /// "" if valid, else the message.
+  std::string validate() const;
+};
+
+/// What an iteration callback (and the history) sees.
+struct IterationSummary {
+  std::string phase;             ///< algorithm of the current phase
+  std::int64_t iteration = 0;    ///< within the phase
+  std::int64_t total_iteration = 0;
+  double cost = NAN;             ///< the cost the phase's algorithm minimizes
+  double ml_cost = NAN;          ///< f(x), comparable across algorithms
+  double rel_change = NAN;       ///< ||x(k)-x(k-1)|| / ||x(k)||
+  double grad_norm = NAN;
+  double rmse = NAN, mpe = NAN;  ///< when truth is known
+  double messages = 0;           ///< cumulative messages per sensor (all phases)
+  double reals = 0;              ///< cumulative reals per sensor (all phases)
+  double elapsed = 0;            ///< seconds since solve() began
+};
+
+enum class CallbackReturn { kContinue, kAbort };
+
+class IterationCallback {
+ public:
+  virtual ~IterationCallback() = default;
+  /// Called collectively on every rank at recorded iterations.
+  virtual CallbackReturn operator()(const IterationSummary& s) = 0;
+};
+
+struct Summary {
+  std::string algorithm;
+  TerminationType termination = TerminationType::kNoConvergence;
+  std::string message;
+  std::int64_t iterations = 0;  ///< all phases
+  bool converged = false;
+  double initial_cost = NAN, final_cost = NAN;  ///< of the last phase's own objective
+  CostTerms costs;                              ///< at the final point
+  ErrorMetrics errors;
+  double messages_per_sensor = 0, reals_per_sensor = 0;
+  std::int64_t mpi_bytes = 0;        ///< halo bytes sent, all ranks (algorithm exchanges)
+  double comm_wait_fraction = 0;     ///< time waiting in halo end() / wall (max over ranks)
+  double wall_seconds = 0;
+  double lipschitz = NAN;
+  int ranks = 1;
+  std::vector<IterationSummary> history;
+  std::string brief_report() const;
+};
+
+/// One iterative method on a LocalizationProblem. Positions are local arrays
+/// [num_local * p]: owned rows first, ghost rows after.
+class Algorithm {
+ public:
+  virtual ~Algorithm() = default;
+  virtual std::string name() const = 0;
+  /// Collective. Starts from x (owned rows valid; ghosts are exchanged here).
+  virtual void start(const std::vector<double>& x) = 0;
+  /// Collective. One iteration of the paper's update.
+  virtual void iterate() = 0;
+  /// Current iterate; owned rows valid.
+  virtual const std::vector<double>& positions() const = 0;
+  /// Collective: the objective the method minimizes at the current iterate.
+  virtual double objective() = 0;
+  /// This rank's sums over owned rows of ||x(k)-x(k-1)||^2 and ||x(k)||^2.
+  virtual void change_norms(double* diff_sq, double* x_sq) const = 0;
+  /// This rank's squared norm of the last gradient computed (NaN if none).
+  virtual double grad_norm_sq() const { return std::numeric_limits<double>::quiet_NaN(); }
+  /// Per sensor per iteration (spec: one broadcast of a p-vector = 1 message, p reals).
+  virtual double messages_per_iteration() const { return 1.0; }
+  virtual double reals_per_iteration() const = 0;
+  /// Constant used by the method (NaN if none).
+  virtual double lipschitz() const { return std::numeric_limits<double>::quiet_NaN(); }
+};
+
+/// Factory: "relaxation", "mm", "bb". Throws snl::Error for an unknown name.
+std::unique_ptr<Algorithm> make_algorithm(const std::string& name, LocalizationProblem& prob,
+                                          const SolverOptions& opt);
+
+/// Initial point: --init random (uniform in the bounding box of the anchors,
+/// keyed by (seed, global id): the same for any number of ranks). Owned rows.
+std::vector<double> random_initial_positions(const LocalizationProblem& prob, std::uint64_t seed);
+
+/// Runs the configured algorithm (or pipeline) from x0 (owned rows, local
+/// order). Collective. The final owned positions are left in `x_out`.
+class Solver {
+ public:
+  Solver(LocalizationProblem& prob, SolverOptions opt);
+  void add_callback(IterationCallback* cb) { callbacks_.push_back(cb); }
+  Summary solve(const std::vector<double>& x0, std::vector<double>* x_out);
+
+ private:
+  LocalizationProblem& prob_;
+  SolverOptions opt_;
+  std::vector<IterationCallback*> callbacks_;
+};
+
+}  // namespace snl

@@ -1,0 +1,424 @@
+// The synchronous methods: disk relaxation by Nesterov's method (003, Alg. 1),
+// MM nonconvex refinement (000, Alg. 1) and the Barzilai-Borwein baseline
+// (Calafiore, Carlone, Wei 2010, as compared in 000). Every node sums its
+// neighbours in global-id order, so iterates are bit-identical for any number
+// of ranks. Each iteration: halo begin -> interior nodes -> halo end -> boundary.
+#include <algorithm>
+#include <cmath>
+
+#include "snl/metrics.hpp"
+#include "snl/random.hpp"
+#include "snl/solver.hpp"
+
+namespace snl {
+
+namespace {
+
+std::vector<double> with_ghost_rows(const LocalizationProblem& prob, const std::vector<double>& x) {
+  std::vector<double> out(std::size_t(prob.num_local()) * prob.dim(), 0.0);
+  std::copy(x.begin(), x.begin() + std::size_t(prob.num_owned()) * prob.dim(), out.begin());
+  return out;
+}
+
+void diff_norms(const LocalizationProblem& prob, const double* now, const double* before, double* d, double* s) {
+  const std::size_t m = std::size_t(prob.num_owned()) * prob.dim();
+  double dd = 0, ss = 0;
+  for (std::size_t t = 0; t < m; ++t) {
+    const double q = now[t] - before[t];
+    dd += q * q;
+    ss += now[t] * now[t];
+  }
+  *d = dd;
+  *s = ss;
+}
+
+// ---------------------------------------------------------------------------
+// Disk relaxation, Nesterov's method (003, Algorithm 1):
+//   w = x(k-1) + (k-2)/(k+1) (x(k-1) - x(k-2)),   x(k) = w - grad f_hat(w) / L.
+class Relaxation final : public Algorithm {
+ public:
+  explicit Relaxation(LocalizationProblem& prob) : prob_(prob), L_(relaxation_lipschitz(prob)) {}
+  std::string name() const override { return "relaxation"; }
+  double lipschitz() const override { return L_; }
+  double reals_per_iteration() const override { return prob_.dim(); }
+
+  void start(const std::vector<double>& x0) override {
+    x_ = with_ghost_rows(prob_, x0);
+    prev_ = x_;  // x(-1) = x(0)
+    w_.assign(x_.size(), 0.0);
+    g_.assign(std::size_t(prob_.num_owned()) * prob_.dim(), 0.0);
+    k_ = 0;
+  }
+
+  void iterate() override {
+    ++k_;
+    const int p = prob_.dim();
+    const LocalId n_owned = prob_.num_owned(), n_int = prob_.graph().num_interior();
+    const double beta = static_cast<double>(k_ - 2) / static_cast<double>(k_ + 1);
+    const std::size_t m = std::size_t(n_owned) * p;
+    for (std::size_t t = 0; t < m; ++t) w_[t] = x_[t] + beta * (x_[t] - prev_[t]);
+    HaloPlan& halo = prob_.graph().halo();
+    halo.begin(w_.data(), p);
+    step(0, n_int);
+    halo.end(w_.data(), p);
+    step(n_int, n_owned);
+    diff_norms(prob_, prev_.data(), x_.data(), &diff_sq_, &x_sq_);
+    double gs = 0;
+    for (std::size_t t = 0; t < m; ++t) gs += g_[t] * g_[t];
+    gsq_ = gs;
+    std::swap(x_, prev_);  // x <- x(k), prev <- x(k-1)
+  }
+
+  const std::vector<double>& positions() const override { return x_; }
+  double objective() override {
+    prob_.graph().halo().exchange(x_.data(), prob_.dim());
+    return evaluate_costs(prob_, x_.data()).relaxed;
+  }
+  void change_norms(double* d, double* s) const override {
+    *d = diff_sq_;
+    *s = x_sq_;
+  }
+  double grad_norm_sq() const override { return gsq_; }
+
+ private:
+  // x(k) for owned nodes [b, e), written into prev_ (x(k-2) is no longer needed).
+  void step(LocalId b, LocalId e) {
+    relaxed_gradient(prob_, w_.data(), g_.data(), b, e);
+    const int p = prob_.dim();
+    for (std::size_t t = std::size_t(b) * p; t < std::size_t(e) * p; ++t) prev_[t] = w_[t] - g_[t] / L_;
+  }
+
+  LocalizationProblem& prob_;
+  double L_;
+  std::vector<double> x_, prev_, w_, g_;
+  std::int64_t k_ = 0;
+  double diff_sq_ = 0, x_sq_ = 0, gsq_ = 0;
+};
+
+// ---------------------------------------------------------------------------
+// MM / projected gradient on z = (x, y, w) (000, Algorithm 1, eqs. 11-13),
+// L = 2 delta_max + max|A_i| + 2 (eq. 9). Edge variables y_e live with both
+// ends of the edge and are updated redundantly with identical arithmetic, with
+// the fixed orientation e = (i, j), i < j in global ids.
+template <int P>
+inline void project_sphere(double rho, double* v) {
+  double s = 0;
+  for (int c = 0; c < P; ++c) s += v[c] * v[c];
+  const double nv = std::sqrt(s);
+  if (nv > 0) {
+    const double f = rho / nv;
+    for (int c = 0; c < P; ++c) v[c] *= f;
+  } else {  // P_sphere(0) = rho e_1 (spec convention)
+    v[0] = rho;
+    for (int c = 1; c < P; ++c) v[c] = 0;
+  }
+}
+
+class MM final : public Algorithm {
+ public:
+  explicit MM(LocalizationProblem& prob)
+      : prob_(prob), L_(2.0 * prob.max_degree() + prob.max_anchor_degree() + 2.0) {}
+  std::string name() const override { return "mm"; }
+  double lipschitz() const override { return L_; }
+  double reals_per_iteration() const override { return prob_.dim(); }
+
+  void start(const std::vector<double>& x0) override {
+    x_ = with_ghost_rows(prob_, x0);
+    xn_ = x_;
+    prob_.graph().halo().exchange(x_.data(), prob_.dim());
+    if (prob_.dim() == 2)
+      init<2>();
+    else
+      init<3>();
+  }
+
+  void iterate() override {
+    if (prob_.dim() == 2)
+      iterate_impl<2>();
+    else
+      iterate_impl<3>();
+  }
+
+  const std::vector<double>& positions() const override { return x_; }
+  double objective() override {
+    prob_.graph().halo().exchange(x_.data(), prob_.dim());
+    return prob_.dim() == 2 ? surrogate<2>() : surrogate<3>();
+  }
+  void change_norms(double* d, double* s) const override {
+    *d = diff_sq_;
+    *s = x_sq_;
+  }
+
+ private:
+  template <int P>
+  void init() {
+    const auto& gr = prob_.graph();
+    const auto& off = gr.offsets();
+    const auto& adj = gr.adjacency();
+    y_.assign(adj.size() * P, 0.0);
+    aw_.assign(prob_.anchor_ranges().size() * P, 0.0);
+    for (LocalId v = 0; v < gr.num_owned(); ++v) {
+      for (auto e = off[v]; e < off[v + 1]; ++e) {
+        const LocalId i = oriented_first(v, adj[e]), j = i == v ? adj[e] : v;
+        double* y = &y_[std::size_t(e) * P];
+        for (int c = 0; c < P; ++c) y[c] = x_[std::size_t(i) * P + c] - x_[std::size_t(j) * P + c];
+        project_sphere<P>(gr.edge_value(e), y);
+      }
+      const auto& aoff = prob_.anchor_offsets();
+      for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
+        const double* a = &prob_.anchors()[std::size_t(prob_.anchor_ids()[e]) * P];
+        double* w = &aw_[std::size_t(e) * P];
+        for (int c = 0; c < P; ++c) w[c] = x_[std::size_t(v) * P + c] - a[c];
+        project_sphere<P>(prob_.anchor_ranges()[e], w);
+      }
+    }
+  }
+
+  LocalId oriented_first(LocalId v, LocalId u) const {
+    return prob_.graph().global_id(v) < prob_.graph().global_id(u) ? v : u;
+  }
+
+  template <int P>
+  void update(LocalId b, LocalId e_end) {
+    const auto& gr = prob_.graph();
+    const auto& off = gr.offsets();
+    const auto& adj = gr.adjacency();
+    const auto& aoff = prob_.anchor_offsets();
+    const auto& aid = prob_.anchor_ids();
+    const auto& ar = prob_.anchor_ranges();
+    const double* anc = prob_.anchors().data();
+    const double invL = 1.0 / L_, keep = (L_ - 1.0) / L_;
+    for (LocalId v = b; v < e_end; ++v) {
+      const double* xv = &x_[std::size_t(v) * P];
+      const GlobalId gv = gr.global_id(v);
+      double acc[P] = {};
+      // x-step with y(t), w(t) (eq. 11); then y, w steps with x(t) (eqs. 12-13).
+      for (auto e = off[v]; e < off[v + 1]; ++e) {
+        const LocalId u = adj[e];
+        const double* xu = &x_[std::size_t(u) * P];
+        double* y = &y_[std::size_t(e) * P];
+        const bool forward = gv < gr.global_id(u);  // e = (v, u)
+        const double* xi = forward ? xv : xu;
+        const double* xj = forward ? xu : xv;
+        double dz[P];
+        for (int c = 0; c < P; ++c) dz[c] = xi[c] - xj[c];
+        if (forward)
+          for (int c = 0; c < P; ++c) acc[c] += dz[c] - y[c];
+        else
+          for (int c = 0; c < P; ++c) acc[c] -= dz[c] - y[c];
+        for (int c = 0; c < P; ++c) y[c] = keep * y[c] + invL * dz[c];
+        project_sphere<P>(gr.edge_value(e), y);
+      }
+      for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
+        const double* a = anc + std::size_t(aid[e]) * P;
+        double* w = &aw_[std::size_t(e) * P];
+        double dz[P];
+        for (int c = 0; c < P; ++c) dz[c] = xv[c] - a[c];
+        for (int c = 0; c < P; ++c) acc[c] += dz[c] - w[c];
+        for (int c = 0; c < P; ++c) w[c] = keep * w[c] + invL * dz[c];
+        project_sphere<P>(ar[e], w);
+      }
+      double* xo = &xn_[std::size_t(v) * P];
+      for (int c = 0; c < P; ++c) xo[c] = xv[c] - invL * acc[c];
+    }
+  }
+
+  template <int P>
+  void iterate_impl() {
+    HaloPlan& halo = prob_.graph().halo();
+    const LocalId n_int = prob_.graph().num_interior(), n_owned = prob_.num_owned();
+    halo.begin(x_.data(), P);
+    update<P>(0, n_int);
+    halo.end(x_.data(), P);
+    update<P>(n_int, n_owned);
+    diff_norms(prob_, xn_.data(), x_.data(), &diff_sq_, &x_sq_);
+    std::swap(x_, xn_);
+  }
+
+  // F(z) = 1/2 sum ||x_i - x_j - y_e||^2 + 1/2 sum ||x_i - a_k - w_ik||^2 (000, eq. 2).
+  template <int P>
+  double surrogate() const {
+    const auto& gr = prob_.graph();
+    const auto& off = gr.offsets();
+    const auto& adj = gr.adjacency();
+    const auto& aoff = prob_.anchor_offsets();
+    double F = 0;
+    for (LocalId v = 0; v < gr.num_owned(); ++v) {
+      const GlobalId gv = gr.global_id(v);
+      for (auto e = off[v]; e < off[v + 1]; ++e) {
+        const LocalId u = adj[e];
+        if (gr.global_id(u) < gv) continue;
+        double s = 0;
+        for (int c = 0; c < P; ++c) {
+          const double r = x_[std::size_t(v) * P + c] - x_[std::size_t(u) * P + c] - y_[std::size_t(e) * P + c];
+          s += r * r;
+        }
+        F += 0.5 * s;
+      }
+      for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
+        const double* a = &prob_.anchors()[std::size_t(prob_.anchor_ids()[e]) * P];
+        double s = 0;
+        for (int c = 0; c < P; ++c) {
+          const double r = x_[std::size_t(v) * P + c] - a[c] - aw_[std::size_t(e) * P + c];
+          s += r * r;
+        }
+        F += 0.5 * s;
+      }
+    }
+    double G = 0;
+    MPI_Allreduce(&F, &G, 1, MPI_DOUBLE, MPI_SUM, prob_.comm());
+    return G;
+  }
+
+  LocalizationProblem& prob_;
+  double L_;
+  std::vector<double> x_, xn_, y_, aw_;
+  double diff_sq_ = 0, x_sq_ = 0;
+};
+
+// ---------------------------------------------------------------------------
+// Barzilai-Borwein gradient descent on the ML cost f (Calafiore et al. 2010):
+// alpha = s's / s'y with both inner products estimated by T rounds of average
+// consensus with Metropolis weights, so each node uses its own estimate.
+class BB final : public Algorithm {
+ public:
+  BB(LocalizationProblem& prob, int rounds) : prob_(prob), T_(rounds), alpha0_(1.0 / relaxation_lipschitz(prob)) {}
+  std::string name() const override { return "bb"; }
+  double lipschitz() const override { return relaxation_lipschitz(prob_); }
+  double messages_per_iteration() const override { return 1.0 + T_; }
+  double reals_per_iteration() const override { return prob_.dim() + 2.0 * T_; }
+
+  void start(const std::vector<double>& x0) override {
+    const int p = prob_.dim();
+    const auto& gr = prob_.graph();
+    x_ = with_ghost_rows(prob_, x0);
+    const std::size_t mo = std::size_t(prob_.num_owned()) * p;
+    x_old_.assign(mo, 0.0);
+    g_.assign(mo, 0.0);
+    g_old_.assign(mo, 0.0);
+    c_.assign(std::size_t(prob_.num_local()) * 2, 0.0);
+    cn_.assign(std::size_t(prob_.num_owned()) * 2, 0.0);
+    // Metropolis weights W_ij = 1 / (1 + max(deg_i, deg_j)) from the neighbours' degrees.
+    std::vector<double> deg(std::size_t(prob_.num_local()), 0.0);
+    for (LocalId v = 0; v < gr.num_owned(); ++v) deg[v] = gr.degree(v);
+    prob_.graph().halo().exchange(deg.data(), 1);
+    wt_.resize(gr.adjacency().size());
+    self_.assign(gr.num_owned(), 1.0);
+    for (LocalId v = 0; v < gr.num_owned(); ++v)
+      for (auto e = gr.offsets()[v]; e < gr.offsets()[v + 1]; ++e) {
+        wt_[e] = 1.0 / (1.0 + std::max(deg[v], deg[gr.adjacency()[e]]));
+        self_[v] -= wt_[e];
+      }
+    k_ = 0;
+  }
+
+  void iterate() override {
+    ++k_;
+    const int p = prob_.dim();
+    auto& gr = prob_.graph();
+    HaloPlan& halo = gr.halo();
+    const LocalId n_owned = gr.num_owned(), n_int = gr.num_interior();
+    halo.begin(x_.data(), p);
+    ml_gradient(prob_, x_.data(), g_.data(), 0, n_int);
+    halo.end(x_.data(), p);
+    ml_gradient(prob_, x_.data(), g_.data(), n_int, n_owned);
+    // Local inner products s_i's_i and s_i'y_i, then T consensus rounds.
+    for (LocalId v = 0; v < n_owned; ++v) {
+      double ss = 0, sy = 0;
+      for (int c = 0; c < p; ++c) {
+        const std::size_t t = std::size_t(v) * p + c;
+        const double s = x_[t] - x_old_[t], y = g_[t] - g_old_[t];
+        ss += s * s;
+        sy += s * y;
+      }
+      c_[2 * std::size_t(v)] = ss;
+      c_[2 * std::size_t(v) + 1] = sy;
+    }
+    for (int r = 0; r < T_; ++r) {
+      halo.exchange(c_.data(), 2);
+      for (LocalId v = 0; v < n_owned; ++v) {
+        double a = self_[v] * c_[2 * std::size_t(v)], b = self_[v] * c_[2 * std::size_t(v) + 1];
+        for (auto e = gr.offsets()[v]; e < gr.offsets()[v + 1]; ++e) {
+          const LocalId u = gr.adjacency()[e];
+          a += wt_[e] * c_[2 * std::size_t(u)];
+          b += wt_[e] * c_[2 * std::size_t(u) + 1];
+        }
+        cn_[2 * std::size_t(v)] = a;
+        cn_[2 * std::size_t(v) + 1] = b;
+      }
+      std::copy(cn_.begin(), cn_.end(), c_.begin());
+    }
+    double dd = 0, xs = 0, gs = 0;
+    for (LocalId v = 0; v < n_owned; ++v) {
+      double alpha = alpha0_;
+      if (k_ > 1) {
+        const double a = c_[2 * std::size_t(v)] / c_[2 * std::size_t(v) + 1];
+        if (std::isfinite(a) && a > 0) alpha = a;  // safeguard: fall back to 1/L
+      }
+      for (int c = 0; c < p; ++c) {
+        const std::size_t t = std::size_t(v) * p + c;
+        x_old_[t] = x_[t];
+        g_old_[t] = g_[t];
+        x_[t] -= alpha * g_[t];
+        dd += (x_[t] - x_old_[t]) * (x_[t] - x_old_[t]);
+        xs += x_[t] * x_[t];
+        gs += g_[t] * g_[t];
+      }
+    }
+    diff_sq_ = dd;
+    x_sq_ = xs;
+    gsq_ = gs;
+  }
+
+  const std::vector<double>& positions() const override { return x_; }
+  double objective() override {
+    prob_.graph().halo().exchange(x_.data(), prob_.dim());
+    return evaluate_costs(prob_, x_.data()).ml;
+  }
+  void change_norms(double* d, double* s) const override {
+    *d = diff_sq_;
+    *s = x_sq_;
+  }
+  double grad_norm_sq() const override { return gsq_; }
+
+ private:
+  LocalizationProblem& prob_;
+  int T_;
+  double alpha0_;
+  std::vector<double> x_, x_old_, g_, g_old_, c_, cn_, wt_, self_;
+  std::int64_t k_ = 0;
+  double diff_sq_ = 0, x_sq_ = 0, gsq_ = 0;
+};
+
+}  // namespace
+
+std::unique_ptr<Algorithm> make_algorithm(const std::string& name, LocalizationProblem& prob,
+                                          const SolverOptions& opt) {
+  if (name == "relaxation") return std::make_unique<Relaxation>(prob);
+  if (name == "mm") return std::make_unique<MM>(prob);
+  if (name == "bb") return std::make_unique<BB>(prob, opt.bb_rounds);
+  throw Error("unknown algorithm '" + name + "'");
+}
+
+std::vector<double> random_initial_positions(const LocalizationProblem& prob, std::uint64_t seed) {
+  const int p = prob.dim();
+  std::vector<double> lo(p, 0.0), hi(p, 1.0);
+  const auto& a = prob.anchors();
+  if (!a.empty()) {
+    for (int c = 0; c < p; ++c) lo[c] = hi[c] = a[c];
+    for (std::size_t k = 0; k < a.size() / p; ++k)
+      for (int c = 0; c < p; ++c) {
+        lo[c] = std::min(lo[c], a[k * p + c]);
+        hi[c] = std::max(hi[c], a[k * p + c]);
+      }
+  }
+  std::vector<double> x(std::size_t(prob.num_owned()) * p);
+  for (LocalId v = 0; v < prob.num_owned(); ++v) {
+    const auto g = static_cast<std::uint64_t>(prob.graph().global_id(v));
+    for (int c = 0; c < p; ++c)
+      x[std::size_t(v) * p + c] = lo[c] + (hi[c] - lo[c]) * uniform01(seed, RngStream::kInit, g * p + c);
+  }
+  return x;
+}
+
+}  // namespace snl

@@ -1,0 +1,178 @@
+#include "snl/reference.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace snl::reference {
+
+namespace {
+double dist(const double* a, const double* b, int p) {
+  double s = 0;
+  for (int c = 0; c < p; ++c) s += (a[c] - b[c]) * (a[c] - b[c]);
+  return std::sqrt(s);
+}
+void sphere(double rho, double* v, int p) {
+  double s = 0;
+  for (int c = 0; c < p; ++c) s += v[c] * v[c];
+  s = std::sqrt(s);
+  if (s > 0)
+    for (int c = 0; c < p; ++c) v[c] = rho * v[c] / s;
+  else {
+    v[0] = rho;
+    for (int c = 1; c < p; ++c) v[c] = 0;
+  }
+}
+std::vector<int> degrees(const Network& net) {
+  std::vector<int> d(net.num_sensors, 0);
+  for (std::size_t e = 0; e < net.sensor_ranges.size(); ++e) {
+    ++d[net.sensor_edges[2 * e]];
+    ++d[net.sensor_edges[2 * e + 1]];
+  }
+  return d;
+}
+int max_anchor_degree(const Network& net) {
+  std::vector<int> d(net.num_sensors, 0);
+  for (std::size_t e = 0; e < net.anchor_ranges.size(); ++e) ++d[net.anchor_edges[2 * e]];
+  return d.empty() ? 0 : *std::max_element(d.begin(), d.end());
+}
+}  // namespace
+
+double ml_cost(const Network& net, const std::vector<double>& x) {
+  const int p = net.dim;
+  double f = 0;
+  for (std::size_t e = 0; e < net.sensor_ranges.size(); ++e) {
+    const double r = dist(&x[net.sensor_edges[2 * e] * p], &x[net.sensor_edges[2 * e + 1] * p], p) - net.sensor_ranges[e];
+    f += 0.5 * r * r;
+  }
+  for (std::size_t e = 0; e < net.anchor_ranges.size(); ++e) {
+    const double r = dist(&x[net.anchor_edges[2 * e] * p], &net.anchors[net.anchor_edges[2 * e + 1] * p], p) -
+                     net.anchor_ranges[e];
+    f += 0.5 * r * r;
+  }
+  return f;
+}
+
+double relaxed_cost(const Network& net, const std::vector<double>& x) {
+  const int p = net.dim;
+  double f = 0;
+  for (std::size_t e = 0; e < net.sensor_ranges.size(); ++e) {
+    const double r = dist(&x[net.sensor_edges[2 * e] * p], &x[net.sensor_edges[2 * e + 1] * p], p) - net.sensor_ranges[e];
+    if (r > 0) f += 0.5 * r * r;
+  }
+  for (std::size_t e = 0; e < net.anchor_ranges.size(); ++e) {
+    const double r = dist(&x[net.anchor_edges[2 * e] * p], &net.anchors[net.anchor_edges[2 * e + 1] * p], p) -
+                     net.anchor_ranges[e];
+    if (r > 0) f += 0.5 * r * r;
+  }
+  return f;
+}
+
+std::vector<double> relaxed_gradient(const Network& net, const std::vector<double>& x) {
+  const int p = net.dim;
+  std::vector<double> g(x.size(), 0.0);
+  for (std::size_t e = 0; e < net.sensor_ranges.size(); ++e) {
+    const GlobalId i = net.sensor_edges[2 * e], j = net.sensor_edges[2 * e + 1];
+    const double d = dist(&x[i * p], &x[j * p], p);
+    if (d <= net.sensor_ranges[e]) continue;
+    const double c = 1 - net.sensor_ranges[e] / d;
+    for (int k = 0; k < p; ++k) {
+      g[i * p + k] += c * (x[i * p + k] - x[j * p + k]);
+      g[j * p + k] -= c * (x[i * p + k] - x[j * p + k]);
+    }
+  }
+  for (std::size_t e = 0; e < net.anchor_ranges.size(); ++e) {
+    const GlobalId i = net.anchor_edges[2 * e];
+    const double* a = &net.anchors[net.anchor_edges[2 * e + 1] * p];
+    const double d = dist(&x[i * p], a, p);
+    if (d <= net.anchor_ranges[e]) continue;
+    const double c = 1 - net.anchor_ranges[e] / d;
+    for (int k = 0; k < p; ++k) g[i * p + k] += c * (x[i * p + k] - a[k]);
+  }
+  return g;
+}
+
+double relaxation_lipschitz(const Network& net) {
+  const auto d = degrees(net);
+  const int dmax = d.empty() ? 0 : *std::max_element(d.begin(), d.end());
+  return 2.0 * dmax + max_anchor_degree(net);
+}
+
+std::vector<double> nesterov(const Network& net, const std::vector<double>& x0, int iters) {
+  const double L = relaxation_lipschitz(net);
+  std::vector<double> x = x0, xm = x0, w(x0.size());
+  for (int k = 1; k <= iters; ++k) {
+    for (std::size_t t = 0; t < x.size(); ++t) w[t] = x[t] + (double(k) - 2) / (double(k) + 1) * (x[t] - xm[t]);
+    const auto g = relaxed_gradient(net, w);
+    xm = x;
+    for (std::size_t t = 0; t < x.size(); ++t) x[t] = w[t] - g[t] / L;
+  }
+  return x;
+}
+
+std::vector<double> mm(const Network& net, const std::vector<double>& x0, int iters, std::vector<double>* surrogate) {
+  const int p = net.dim;
+  const auto d = degrees(net);
+  const double L = 2.0 * (d.empty() ? 0 : *std::max_element(d.begin(), d.end())) + max_anchor_degree(net) + 2.0;
+  const std::size_t E = net.sensor_ranges.size(), Ea = net.anchor_ranges.size();
+  // Orientation i -> j with i < j.
+  std::vector<GlobalId> ei(E), ej(E);
+  for (std::size_t e = 0; e < E; ++e) {
+    ei[e] = std::min(net.sensor_edges[2 * e], net.sensor_edges[2 * e + 1]);
+    ej[e] = std::max(net.sensor_edges[2 * e], net.sensor_edges[2 * e + 1]);
+  }
+  std::vector<double> x = x0, y(E * p), w(Ea * p);
+  for (std::size_t e = 0; e < E; ++e) {
+    for (int c = 0; c < p; ++c) y[e * p + c] = x[ei[e] * p + c] - x[ej[e] * p + c];
+    sphere(net.sensor_ranges[e], &y[e * p], p);
+  }
+  for (std::size_t e = 0; e < Ea; ++e) {
+    const double* a = &net.anchors[net.anchor_edges[2 * e + 1] * p];
+    for (int c = 0; c < p; ++c) w[e * p + c] = x[net.anchor_edges[2 * e] * p + c] - a[c];
+    sphere(net.anchor_ranges[e], &w[e * p], p);
+  }
+  auto F = [&]() {
+    double s = 0;
+    for (std::size_t e = 0; e < E; ++e)
+      for (int c = 0; c < p; ++c) {
+        const double r = x[ei[e] * p + c] - x[ej[e] * p + c] - y[e * p + c];
+        s += 0.5 * r * r;
+      }
+    for (std::size_t e = 0; e < Ea; ++e)
+      for (int c = 0; c < p; ++c) {
+        const double r = x[net.anchor_edges[2 * e] * p + c] - net.anchors[net.anchor_edges[2 * e + 1] * p + c] - w[e * p + c];
+        s += 0.5 * r * r;
+      }
+    return s;
+  };
+  if (surrogate) surrogate->assign(1, F());
+  for (int t = 0; t < iters; ++t) {
+    // Gradient of F with respect to x at z(t), then the projected steps (000, eqs. 11-13).
+    std::vector<double> gx(x.size(), 0.0), yn = y, wn = w;
+    for (std::size_t e = 0; e < E; ++e)
+      for (int c = 0; c < p; ++c) {
+        const double dz = x[ei[e] * p + c] - x[ej[e] * p + c];
+        const double r = dz - y[e * p + c];
+        gx[ei[e] * p + c] += r;
+        gx[ej[e] * p + c] -= r;
+        yn[e * p + c] = (L - 1) / L * y[e * p + c] + 1 / L * dz;
+      }
+    for (std::size_t e = 0; e < E; ++e) sphere(net.sensor_ranges[e], &yn[e * p], p);
+    for (std::size_t e = 0; e < Ea; ++e) {
+      const GlobalId i = net.anchor_edges[2 * e];
+      const double* a = &net.anchors[net.anchor_edges[2 * e + 1] * p];
+      for (int c = 0; c < p; ++c) {
+        const double dz = x[i * p + c] - a[c];
+        gx[i * p + c] += dz - w[e * p + c];
+        wn[e * p + c] = (L - 1) / L * w[e * p + c] + 1 / L * dz;
+      }
+      sphere(net.anchor_ranges[e], &wn[e * p], p);
+    }
+    for (std::size_t t2 = 0; t2 < x.size(); ++t2) x[t2] -= gx[t2] / L;
+    y.swap(yn);
+    w.swap(wn);
+    if (surrogate) surrogate->push_back(F());
+  }
+  return x;
+}
+
+}  // namespace snl::reference

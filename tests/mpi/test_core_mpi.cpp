@@ -1,0 +1,210 @@
+// Distributed core: halo plan, relaxation and MM against the serial reference
+// twin, bit-identical iterates for 1, 2 and 3 ranks (sub-communicators of this
+// run), metis and block partitions.
+#include <gtest/gtest.h>
+#include <mpi.h>
+
+#include <cstring>
+
+#include "snl/metrics.hpp"
+#include "snl/reference.hpp"
+#include "snl/solver.hpp"
+#include "test_networks.hpp"
+
+using namespace snl;
+using snl::test::allgather_positions;
+using snl::test::make_network;
+using snl::test::NetSpec;
+using snl::test::slab_of;
+
+namespace {
+
+Network merged(Network w) {
+  merge_duplicates(w.sensor_edges, w.sensor_ranges, w.anchor_edges, w.anchor_ranges);
+  w.total_sensor_edges = w.local_sensor_edges();
+  w.total_anchor_edges = w.local_anchor_edges();
+  return w;
+}
+
+// Positions (global order) after `iters` iterations of `alg` on `comm`.
+std::vector<double> run(MPI_Comm comm, const Network& whole, const std::string& alg, int iters,
+                        PartitionMethod pm = PartitionMethod::kMetis) {
+  LocalizationProblem prob(comm, slab_of(whole, comm), pm, nullptr);
+  SolverOptions opt;
+  opt.algorithm = alg;
+  opt.max_iter = iters;
+  opt.tol = 0;
+  opt.history_every = 1000000;
+  Solver solver(prob, opt);
+  std::vector<double> x;
+  solver.solve(random_initial_positions(prob, 3), &x);
+  return allgather_positions(prob, x);
+}
+
+int world_rank() {
+  int r = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &r);
+  return r;
+}
+int world_size() {
+  int s = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &s);
+  return s;
+}
+
+}  // namespace
+
+TEST(Halo, GhostsReceiveOwnersValues) {
+  const Network w = make_network({.n = 200, .dim = 2, .radius = 0.15});
+  LocalizationProblem prob(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kMetis, nullptr);
+  const auto& g = prob.graph();
+  std::vector<double> f(std::size_t(g.num_local()) * 2, -1.0);
+  for (LocalId v = 0; v < g.num_owned(); ++v) {
+    f[2 * v] = double(g.global_id(v));
+    f[2 * v + 1] = -double(g.global_id(v));
+  }
+  prob.graph().halo().exchange(f.data(), 2);
+  for (LocalId v = g.num_owned(); v < g.num_local(); ++v) {
+    EXPECT_EQ(f[2 * v], double(g.global_id(v)));
+    EXPECT_EQ(f[2 * v + 1], -double(g.global_id(v)));
+  }
+  // Interior nodes have no ghost neighbours; neighbour lists are sorted by global id.
+  for (LocalId v = 0; v < g.num_owned(); ++v) {
+    for (auto e = g.offsets()[v]; e < g.offsets()[v + 1]; ++e) {
+      if (v < g.num_interior()) EXPECT_LT(g.adjacency()[e], g.num_owned());
+      if (e > g.offsets()[v]) EXPECT_LT(g.global_id(g.adjacency()[e - 1]), g.global_id(g.adjacency()[e]));
+    }
+  }
+  long long owned = g.num_owned(), total = 0;
+  MPI_Allreduce(&owned, &total, 1, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
+  EXPECT_EQ(total, 200);
+}
+
+TEST(Problem, MergesDuplicatesAndMovesAnchorsToOwners) {
+  NetSpec s;
+  s.n = 60;
+  s.duplicates = true;
+  const Network w = make_network(s);
+  ProblemReport rep;
+  LocalizationProblem prob(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kBlock, &rep);
+  EXPECT_GT(rep.merged.merged_sensor_pairs, 0);
+  const Network m = merged(w);
+  EXPECT_EQ(rep.num_sensor_edges, m.local_sensor_edges());
+  EXPECT_EQ(rep.num_anchor_edges, m.local_anchor_edges());
+  long long a = static_cast<long long>(prob.anchor_ids().size()), at = 0;
+  MPI_Allreduce(&a, &at, 1, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
+  EXPECT_EQ(at, m.local_anchor_edges());
+}
+
+TEST(Relaxation, MatchesSerialReference) {
+  NetSpec s;
+  s.duplicates = true;
+  const Network w = make_network(s);
+  const Network m = merged(w);
+  const auto x = run(MPI_COMM_WORLD, w, "relaxation", 60);
+  LocalizationProblem prob(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kMetis, nullptr);
+  const auto x0 = allgather_positions(prob, random_initial_positions(prob, 3));
+  const auto xr = reference::nesterov(m, x0, 60);
+  ASSERT_EQ(x.size(), xr.size());
+  for (std::size_t t = 0; t < x.size(); ++t) EXPECT_NEAR(x[t], xr[t], 1e-12) << t;
+}
+
+TEST(MM, MatchesSerialReferenceAndSurrogateNeverIncreases) {
+  const Network w = make_network({.n = 40, .dim = 3, .radius = 0.5, .anchor_radius = 0.8, .sigma = 0.05});
+  const auto x = run(MPI_COMM_WORLD, w, "mm", 50);
+  LocalizationProblem prob(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kMetis, nullptr);
+  const auto x0 = allgather_positions(prob, random_initial_positions(prob, 3));
+  std::vector<double> F;
+  const auto xr = reference::mm(w, x0, 50, &F);
+  for (std::size_t t = 0; t < x.size(); ++t) EXPECT_NEAR(x[t], xr[t], 1e-12) << t;
+  for (std::size_t t = 1; t < F.size(); ++t) EXPECT_LE(F[t], F[t - 1] * (1 + 1e-14)) << t;
+  EXPECT_LE(reference::ml_cost(w, xr), F.back() * (1 + 1e-12));  // f(x) <= F(z)
+}
+
+TEST(Determinism, BitIdenticalForOneTwoThreeRanks) {
+  const Network w = make_network({.n = 120, .dim = 2, .radius = 0.2, .anchor_radius = 0.3, .sigma = 0.05});
+  for (const char* alg : {"relaxation", "mm", "bb", "pipeline"}) {
+    for (PartitionMethod pm : {PartitionMethod::kMetis, PartitionMethod::kBlock}) {
+      const auto ref = run(MPI_COMM_SELF, w, alg, 40, pm);
+      for (int k = 2; k <= world_size(); ++k) {
+        MPI_Comm sub;
+        MPI_Comm_split(MPI_COMM_WORLD, world_rank() < k ? 0 : MPI_UNDEFINED, world_rank(), &sub);
+        if (sub == MPI_COMM_NULL) continue;
+        const auto x = run(sub, w, alg, 40, pm);
+        ASSERT_EQ(x.size(), ref.size());
+        EXPECT_EQ(0, std::memcmp(x.data(), ref.data(), x.size() * sizeof(double)))
+            << alg << " differs on " << k << " ranks";
+        MPI_Comm_free(&sub);
+      }
+    }
+  }
+}
+
+TEST(Relaxation, ConvergesAtTheNesterovRate) {
+  // f_hat(x(k)) - f_hat* <= 2 L ||x(0) - x*||^2 / (k+1)^2 (003, Sec. IV-B).
+  const Network w = merged(make_network({.n = 50, .dim = 2, .radius = 0.3, .anchor_radius = 0.3, .sigma = 0.05}));
+  LocalizationProblem prob(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kMetis, nullptr);
+  const auto x0 = allgather_positions(prob, random_initial_positions(prob, 3));
+  const double L = reference::relaxation_lipschitz(w);
+  EXPECT_EQ(L, relaxation_lipschitz(prob));
+  const auto xstar = reference::nesterov(w, x0, 20000);
+  const double fstar = reference::relaxed_cost(w, xstar);
+  double r2 = 0;
+  for (std::size_t t = 0; t < x0.size(); ++t) r2 += (x0[t] - xstar[t]) * (x0[t] - xstar[t]);
+  for (int k : {1, 2, 5, 10, 50, 100, 500, 1000}) {
+    const auto xk = reference::nesterov(w, x0, k);
+    EXPECT_LE(reference::relaxed_cost(w, xk) - fstar, 2 * L * r2 / ((k + 1.0) * (k + 1.0)) + 1e-12) << k;
+  }
+}
+
+TEST(Relaxation, NoiselessFullAnchorNetworkIsRecoveredExactly) {
+  // Every sensor measures every anchor and sigma = 0: the relaxation is tight.
+  const Network w = make_network({.n = 30, .dim = 2, .radius = 0.35, .anchor_radius = 2.0, .sigma = 0.0});
+  LocalizationProblem prob(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kMetis, nullptr);
+  SolverOptions opt;
+  opt.algorithm = "relaxation";
+  opt.max_iter = 20000;
+  opt.tol = 1e-13;
+  Solver solver(prob, opt);
+  const Summary s = solver.solve(random_initial_positions(prob, 1), nullptr);
+  EXPECT_LT(s.errors.rmse, 1e-6);
+  EXPECT_LT(s.costs.certificate, 1e-10);
+  EXPECT_GT(s.costs.apriori, 1.0);
+}
+
+TEST(Solver, StopsOnRelativeImprovementAndRecordsHistory) {
+  const Network w = make_network({.n = 50, .dim = 2, .radius = 0.3, .anchor_radius = 0.3, .sigma = 0.01});
+  LocalizationProblem prob(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kMetis, nullptr);
+  SolverOptions opt;
+  opt.algorithm = "pipeline";
+  opt.max_iter = 100000;
+  opt.tol = 1e-6;
+  Solver solver(prob, opt);
+  const Summary s = solver.solve(random_initial_positions(prob, 1), nullptr);
+  EXPECT_EQ(s.termination, TerminationType::kConvergence);
+  EXPECT_LT(s.iterations, 200000);
+  ASSERT_GE(s.history.size(), 3u);
+  EXPECT_EQ(s.history.front().phase, "relaxation");
+  EXPECT_EQ(s.history.back().phase, "mm");
+  for (std::size_t t = 1; t < s.history.size(); ++t) EXPECT_GE(s.history[t].reals, s.history[t - 1].reals);
+  EXPECT_DOUBLE_EQ(s.reals_per_sensor, 2.0 * s.iterations);
+  // MM refines the relaxation: the ML cost does not go up in the MM phase.
+  double ml_relax = 0;
+  for (const auto& h : s.history)
+    if (h.phase == "relaxation") ml_relax = h.ml_cost;
+  EXPECT_LE(s.costs.ml, ml_relax * (1 + 1e-12));
+  EXPECT_TRUE(s.errors.valid);
+  EXPECT_LT(s.errors.rmse, 0.05);
+}
+
+TEST(Solver, RejectsBadOptions) {
+  SolverOptions o;
+  o.algorithm = "nope";
+  EXPECT_NE(o.validate(), "");
+  o.algorithm = "mm";
+  o.tol = -1;
+  EXPECT_NE(o.validate(), "");
+  o.tol = 0;
+  o.max_iter = -5;
+  EXPECT_NE(o.validate(), "");
+}
