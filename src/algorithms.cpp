@@ -79,6 +79,16 @@ class Relaxation final : public Algorithm {
     *s = x_sq_;
   }
   double grad_norm_sq() const override { return gsq_; }
+  void save(StateWriter& w) const override {
+    w.scalar("k", double(k_));
+    w.node_rows("x", x_.data(), prob_.dim());
+    w.node_rows("x_prev", prev_.data(), prob_.dim());
+  }
+  void load(const StateReader& r) override {
+    k_ = static_cast<std::int64_t>(r.scalar("k"));
+    r.node_rows("x", x_.data(), prob_.dim());
+    r.node_rows("x_prev", prev_.data(), prob_.dim());
+  }
 
  private:
   // x(k) for owned nodes [b, e), written into prev_ (x(k-2) is no longer needed).
@@ -147,6 +157,16 @@ class MM final : public Algorithm {
   void change_norms(double* d, double* s) const override {
     *d = diff_sq_;
     *s = x_sq_;
+  }
+  void save(StateWriter& w) const override {
+    w.node_rows("x", x_.data(), prob_.dim());
+    w.edge_rows("y", y_.data(), prob_.dim());
+    w.anchor_rows("w", aw_.data(), prob_.dim());
+  }
+  void load(const StateReader& r) override {
+    r.node_rows("x", x_.data(), prob_.dim());
+    r.edge_rows("y", y_.data(), prob_.dim());
+    r.anchor_rows("w", aw_.data(), prob_.dim());
   }
 
  private:
@@ -380,6 +400,18 @@ class BB final : public Algorithm {
     *s = x_sq_;
   }
   double grad_norm_sq() const override { return gsq_; }
+  void save(StateWriter& w) const override {
+    w.scalar("k", double(k_));
+    w.node_rows("x", x_.data(), prob_.dim());
+    w.node_rows("x_old", x_old_.data(), prob_.dim());
+    w.node_rows("g_old", g_old_.data(), prob_.dim());
+  }
+  void load(const StateReader& r) override {
+    k_ = static_cast<std::int64_t>(r.scalar("k"));
+    r.node_rows("x", x_.data(), prob_.dim());
+    r.node_rows("x_old", x_old_.data(), prob_.dim());
+    r.node_rows("g_old", g_old_.data(), prob_.dim());
+  }
 
  private:
   LocalizationProblem& prob_;

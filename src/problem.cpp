@@ -1,9 +1,11 @@
 #include "snl/problem.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 
 #include "snl/mpi_util.hpp"
+#include "snl/random.hpp"
 
 namespace snl {
 
@@ -263,6 +265,42 @@ std::vector<double> LocalizationProblem::owned_to_file_rows(const double* owned,
     std::copy(gv.begin() + t * width, gv.begin() + (t + 1) * width, rows.begin() + (gid[t] - b) * width);
   if (row_offset) *row_offset = b;
   return rows;
+}
+
+}  // namespace snl
+
+namespace snl {
+
+void LocalizationProblem::resample_ranges(double sigma, std::uint64_t seed) {
+  if (!has_truth_) throw Error("resampling ranges needs the true positions (dataset truth)");
+  const int p = dim_;
+  std::vector<double> t(std::size_t(graph_.num_local()) * p, 0.0);
+  std::copy(truth_.begin(), truth_.end(), t.begin());
+  graph_.halo().exchange(t.data(), p);
+  const GlobalId n = num_sensors();
+  auto dist = [&](const double* a, const double* b) {
+    double s = 0;
+    for (int c = 0; c < p; ++c) s += (a[c] - b[c]) * (a[c] - b[c]);
+    return std::sqrt(s);
+  };
+  auto& ev = graph_.mutable_edge_values();
+  const auto& off = graph_.offsets();
+  const auto& adj = graph_.adjacency();
+  for (LocalId v = 0; v < graph_.num_owned(); ++v) {
+    for (auto e = off[v]; e < off[v + 1]; ++e) {
+      const GlobalId a = graph_.global_id(v), b = graph_.global_id(adj[e]);
+      const auto key = static_cast<std::uint64_t>(std::min(a, b)) * static_cast<std::uint64_t>(n) +
+                       static_cast<std::uint64_t>(std::max(a, b));
+      const double d = dist(&t[std::size_t(v) * p], &t[std::size_t(adj[e]) * p]);
+      ev[e] = std::abs(d + sigma * standard_normal(seed, RngStream::kExperimentNoise, key));
+    }
+    for (auto e = anchor_offsets_[v]; e < anchor_offsets_[v + 1]; ++e) {
+      const auto key = (static_cast<std::uint64_t>(graph_.global_id(v)) << 20) ^
+                       static_cast<std::uint64_t>(anchor_ids_[e]) ^ 0x8000000000000000ULL;
+      const double d = dist(&t[std::size_t(v) * p], &anchors_[std::size_t(anchor_ids_[e]) * p]);
+      anchor_ranges_[e] = std::abs(d + sigma * standard_normal(seed, RngStream::kExperimentNoise, key));
+    }
+  }
 }
 
 }  // namespace snl

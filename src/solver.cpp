@@ -3,6 +3,8 @@
 #include <mpi.h>
 
 #include <algorithm>
+#include <cstdlib>
+#include <iterator>
 #include <cstdio>
 #include <sstream>
 
@@ -52,10 +54,42 @@ Solver::Solver(LocalizationProblem& prob, SolverOptions opt) : prob_(prob), opt_
   if (!err.empty()) throw Error(err);
 }
 
+namespace {
+
+int phase_code(const std::string& p) { return p == "relaxation" ? 0 : p == "mm" ? 1 : p == "bb" ? 2 : 9; }
+const char* phase_name(int c) { return c == 0 ? "relaxation" : c == 1 ? "mm" : c == 2 ? "bb" : "?"; }
+
+// History as columns (checkpoints) and back.
+const char* kHistoryColumns[] = {"phase",     "iteration", "total_iteration", "cost",  "ml_cost", "rel_change",
+                                 "grad_norm", "rmse",      "mpe",             "messages", "reals", "elapsed"};
+
+std::vector<double> history_column(const std::vector<IterationSummary>& h, int c) {
+  std::vector<double> v;
+  v.reserve(h.size());
+  for (const auto& it : h) {
+    const double vals[] = {double(phase_code(it.phase)), double(it.iteration), double(it.total_iteration), it.cost,
+                           it.ml_cost, it.rel_change, it.grad_norm, it.rmse, it.mpe, it.messages, it.reals,
+                           it.elapsed};
+    v.push_back(vals[c]);
+  }
+  return v;
+}
+
+}  // namespace
+
+std::string Solver::options_fingerprint() const {
+  std::ostringstream os;
+  os.precision(17);
+  os << opt_.algorithm << "|max_iter=" << opt_.max_iter << "|tol=" << opt_.tol << "|grad_tol=" << opt_.grad_tol
+     << "|history_every=" << opt_.history_every << "|bb_rounds=" << opt_.bb_rounds;
+  return os.str();
+}
+
 Summary Solver::solve(const std::vector<double>& x0, std::vector<double>* x_out) {
   MPI_Comm comm = prob_.comm();
   const int p = prob_.dim();
-  const double t0 = MPI_Wtime();
+  const bool root = comm_rank(comm) == 0;
+  double t0 = MPI_Wtime();
   HaloPlan& halo = prob_.graph().halo();
   halo.reset_counters();
   std::int64_t instrumentation_bytes = 0;
@@ -89,21 +123,114 @@ Summary Solver::solve(const std::vector<double>& x0, std::vector<double>* x_out)
   };
 
   std::vector<double> x = x0;
+  x.resize(std::size_t(prob_.num_owned()) * p);
   double messages = 0, reals = 0;
   std::int64_t total_it = 0;
+  std::size_t first_phase = 0;
+  std::int64_t resume_k = -1;  // >= 0: resume phase first_phase at this iteration
+
+  // ---- restart: verify the checkpoint matches this network and these options.
+  std::unique_ptr<H5File> restart_file;
+  if (!ckpt_.restart.empty()) {
+    restart_file = std::make_unique<H5File>(ckpt_.restart, comm, H5File::Mode::kRead);
+    H5File& f = *restart_file;
+    const std::string what = ckpt_.restart + ": ";
+    if (!f.has_attr("format") || f.attr_string("format") != "snl-checkpoint")
+      throw Error(what + "not an snl checkpoint (attribute format != snl-checkpoint)");
+    if (f.attr_int("version") != 1) throw Error(what + "unsupported checkpoint version");
+    if (f.attr_string("network_fingerprint") != ckpt_.network_fingerprint)
+      throw Error(what + "checkpoint of another network (fingerprint " + f.attr_string("network_fingerprint") +
+                  ", this network " + ckpt_.network_fingerprint + ")");
+    if (f.attr_string("options") != options_fingerprint())
+      throw Error(what + "checkpoint of incompatible options (" + f.attr_string("options") + "; now " +
+                  options_fingerprint() + ")");
+    first_phase = static_cast<std::size_t>(f.attr_int("phase"));
+    resume_k = f.attr_int("phase_iteration");
+    total_it = f.attr_int("total_iteration");
+    messages = f.attr_double("messages");
+    reals = f.attr_double("reals");
+    t0 -= f.attr_double("elapsed");
+    if (first_phase >= phases.size() || resume_k < 0 || resume_k > opt_.max_iter)
+      throw Error(what + "checkpoint state out of range");
+    std::vector<std::vector<double>> cols;
+    const auto len = f.shape("history/phase");
+    for (const char* c : kHistoryColumns) {
+      cols.push_back(f.read_rows_double(std::string("history/") + c, 0, len.empty() ? 0 : len[0]));
+      if (cols.back().size() != cols.front().size()) throw Error(what + "malformed history");
+    }
+    for (std::size_t r = 0; r < cols[0].size(); ++r) {
+      IterationSummary it;
+      it.phase = phase_name(static_cast<int>(cols[0][r]));
+      it.iteration = static_cast<std::int64_t>(cols[1][r]);
+      it.total_iteration = static_cast<std::int64_t>(cols[2][r]);
+      it.cost = cols[3][r];
+      it.ml_cost = cols[4][r];
+      it.rel_change = cols[5][r];
+      it.grad_norm = cols[6][r];
+      it.rmse = cols[7][r];
+      it.mpe = cols[8][r];
+      it.messages = cols[9][r];
+      it.reals = cols[10][r];
+      it.elapsed = cols[11][r];
+      sum.history.push_back(it);
+    }
+  }
+
+  static const double delay = [] {
+    const char* d = std::getenv("SNL_TEST_CHECKPOINT_DELAY");  // test hook: a slow checkpoint write
+    return d ? std::atof(d) : 0.0;
+  }();
+  double last_ckpt = MPI_Wtime();
+  auto write_checkpoint = [&](const Algorithm& alg, std::size_t ph, std::int64_t k) {
+    H5File f(ckpt_.path, comm, H5File::Mode::kCreate);
+    f.set_attr("format", std::string("snl-checkpoint"));
+    f.set_attr("version", std::int64_t(1));
+    f.set_attr("network_fingerprint", ckpt_.network_fingerprint);
+    f.set_attr("options", options_fingerprint());
+    f.set_attr("algorithm", opt_.algorithm);
+    f.set_attr("phase", std::int64_t(ph));
+    f.set_attr("phase_algorithm", alg.name());
+    f.set_attr("phase_iteration", k);
+    f.set_attr("total_iteration", total_it);
+    f.set_attr("messages", messages);
+    f.set_attr("reals", reals);
+    f.set_attr("elapsed", MPI_Wtime() - t0);
+    f.set_attr("ranks", std::int64_t(comm_size(comm)));
+    f.set_attr("num_sensors", std::int64_t(prob_.num_sensors()));
+    f.set_attr("dim", std::int64_t(p));
+    for (int c = 0; c < static_cast<int>(std::size(kHistoryColumns)); ++c)
+      f.write_replicated(std::string("history/") + kHistoryColumns[c], history_column(sum.history, c));
+    StateWriter w(f, prob_);
+    alg.save(w);
+    if (delay > 0) {
+      MPI_Barrier(comm);
+      const double until = MPI_Wtime() + delay;
+      while (MPI_Wtime() < until) {
+      }
+    }
+    f.commit();
+    last_ckpt = MPI_Wtime();
+  };
+  const bool checkpointing = !ckpt_.path.empty();
+
   bool stop_all = false;
-  for (std::size_t ph = 0; ph < phases.size() && !stop_all; ++ph) {
+  for (std::size_t ph = first_phase; ph < phases.size() && !stop_all; ++ph) {
     std::unique_ptr<Algorithm> alg = make_algorithm(phases[ph], prob_, opt_);
     alg->start(x);
+    std::int64_t k = 0;
+    if (restart_file && ph == first_phase) {
+      alg->load(StateReader(*restart_file, prob_));
+      k = resume_k;
+      restart_file.reset();
+    }
     sum.lipschitz = alg->lipschitz();
     const std::int64_t every =
         opt_.history_every > 0 ? opt_.history_every : (opt_.max_iter <= 2000 ? 1 : (opt_.max_iter + 999) / 1000);
     double prev_obj = objective_of(*alg);
-    sum.initial_cost = prev_obj;
-    {
+    if (k == 0) {
+      sum.initial_cost = prev_obj;
       IterationSummary it;
       it.phase = alg->name();
-      it.iteration = 0;
       it.total_iteration = total_it;
       it.cost = prev_obj;
       it.messages = messages;
@@ -114,19 +241,22 @@ Summary Solver::solve(const std::vector<double>& x0, std::vector<double>* x_out)
     }
     TerminationType term = TerminationType::kNoConvergence;
     std::string msg;
-    std::int64_t k = 0;
     while (k < opt_.max_iter) {
       alg->iterate();
       ++k;
       ++total_it;
       messages += alg->messages_per_iteration();
       reals += alg->reals_per_iteration();
-      // Stopping quantities: one reduction of three sums.
-      double loc[3] = {0, 0, 0}, glob[3];
+      // One reduction per iteration: stopping sums, and flags every rank must
+      // agree on (a stop signal on any rank; rank 0's checkpoint clock).
+      double loc[5] = {0, 0, 0, 0, 0}, glob[5];
       alg->change_norms(&loc[0], &loc[1]);
       loc[2] = alg->grad_norm_sq();
       if (!std::isfinite(loc[2])) loc[2] = 0;
+      loc[3] = (ckpt_.stop_on_signal && stop_signal_received()) ? 1 : 0;
+      loc[4] = (root && checkpointing && ckpt_.seconds > 0 && MPI_Wtime() - last_ckpt >= ckpt_.seconds) ? 1 : 0;
       MPI_Allreduce(loc, glob, 3, MPI_DOUBLE, MPI_SUM, comm);
+      MPI_Allreduce(loc + 3, glob + 3, 2, MPI_DOUBLE, MPI_MAX, comm);
       const double rel = glob[1] > 0 ? std::sqrt(glob[0] / glob[1]) : std::sqrt(glob[0]);
       const double gnorm = std::sqrt(glob[2]);
       if (!std::isfinite(glob[0]) || !std::isfinite(glob[1])) {
@@ -177,13 +307,25 @@ Summary Solver::solve(const std::vector<double>& x0, std::vector<double>* x_out)
         term = TerminationType::kConvergence;
         break;
       }
+      // Checkpoint only while the phase goes on, so a resume never repeats a stop.
+      const bool signalled = glob[3] > 0;
+      if (checkpointing && !last &&
+          (signalled || glob[4] > 0 || (ckpt_.every > 0 && k % ckpt_.every == 0)))
+        write_checkpoint(*alg, ph, k);
+      if (signalled) {
+        term = TerminationType::kSignal;
+        msg = checkpointing ? "stopped by a signal; checkpoint written to " + ckpt_.path
+                            : "stopped by a signal (no --checkpoint given)";
+        stop_all = true;
+        break;
+      }
     }
     if (term == TerminationType::kNoConvergence) msg = "reached --max-iter";
     const auto& xp = alg->positions();
     std::copy(xp.begin(), xp.begin() + std::size_t(prob_.num_owned()) * p, x.begin());
     sum.final_cost = objective_of(*alg);
     sum.termination = term;
-    sum.message = ph + 1 < phases.size() ? msg : (phases.size() > 1 ? alg->name() + ": " + msg : msg);
+    sum.message = phases.size() > 1 ? alg->name() + ": " + msg : msg;
     sum.converged = term == TerminationType::kConvergence;
   }
   sum.iterations = total_it;

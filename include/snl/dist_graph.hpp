@@ -65,6 +65,8 @@ class DistGraph {
   const std::vector<LocalId>& adjacency() const { return adjacency_; }
   double edge_value(std::int64_t e, int c = 0) const { return edge_values_[e * width_ + c]; }
   const std::vector<double>& edge_values() const { return edge_values_; }
+  /// For clients that redraw edge data in place (Monte Carlo over noise).
+  std::vector<double>& mutable_edge_values() { return edge_values_; }
   int edge_width() const { return width_; }
   LocalId degree(LocalId v) const { return static_cast<LocalId>(offsets_[v + 1] - offsets_[v]); }
   LocalId max_degree() const;  ///< global (collective)

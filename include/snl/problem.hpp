@@ -54,6 +54,11 @@ class LocalizationProblem {
   int max_degree() const { return delta_max_; }            ///< delta_max (global)
   int max_anchor_degree() const { return max_anchor_deg_; }  ///< max_i |A_i| (global)
 
+  /// Monte Carlo over noise: replaces every range by |true distance +
+  /// sigma N(0,1)| (003 eq. 28), the noise keyed by (seed, pair) so that both
+  /// ends of an edge and any number of ranks draw the same value. Needs truth.
+  void resample_ranges(double sigma, std::uint64_t seed);
+
   /// Rows in file order [row_offset, row_offset + rows) on this rank (any
   /// contiguous slabs that tile [0, n)) -> owned rows in local order.
   std::vector<double> file_rows_to_owned(const std::vector<double>& rows, GlobalId row_offset, int width) const;

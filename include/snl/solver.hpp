@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "snl/checkpoint.hpp"
 #include "snl/metrics.hpp"
 #include "snl/problem.hpp"
 
@@ -118,6 +119,9 @@ class Algorithm {
   virtual double reals_per_iteration() const = 0;
   /// Constant used by the method (NaN if none).
   virtual double lipschitz() const { return std::numeric_limits<double>::quiet_NaN(); }
+  /// Collective. Everything needed to continue bit for bit (after start()).
+  virtual void save(StateWriter& w) const = 0;
+  virtual void load(const StateReader& r) = 0;
 };
 
 /// Factory: "relaxation", "mm", "bb". Throws snl::Error for an unknown name.
@@ -128,18 +132,32 @@ std::unique_ptr<Algorithm> make_algorithm(const std::string& name, LocalizationP
 /// keyed by (seed, global id): the same for any number of ranks). Owned rows.
 std::vector<double> random_initial_positions(const LocalizationProblem& prob, std::uint64_t seed);
 
+/// Checkpointing of a Solver run (layout in docs/formats.md).
+struct CheckpointConfig {
+  std::string path;                 ///< write checkpoints here ("" = never)
+  std::int64_t every = 0;           ///< every K iterations (0 = off)
+  double seconds = 0;               ///< and/or every S seconds of wall clock (0 = off)
+  std::string restart;              ///< resume from this checkpoint ("" = fresh start)
+  std::string network_fingerprint;  ///< network_fingerprint() of the input
+  bool stop_on_signal = false;      ///< SIGTERM/SIGUSR1: checkpoint and stop (kSignal)
+};
+
 /// Runs the configured algorithm (or pipeline) from x0 (owned rows, local
 /// order). Collective. The final owned positions are left in `x_out`.
 class Solver {
  public:
   Solver(LocalizationProblem& prob, SolverOptions opt);
   void add_callback(IterationCallback* cb) { callbacks_.push_back(cb); }
+  void set_checkpointing(const CheckpointConfig& c) { ckpt_ = c; }
+  /// Fingerprint of the options that a checkpoint must match to be resumed.
+  std::string options_fingerprint() const;
   Summary solve(const std::vector<double>& x0, std::vector<double>* x_out);
 
  private:
   LocalizationProblem& prob_;
   SolverOptions opt_;
   std::vector<IterationCallback*> callbacks_;
+  CheckpointConfig ckpt_;
 };
 
 }  // namespace snl
