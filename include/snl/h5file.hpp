@@ -65,6 +65,13 @@ class H5File {
   std::vector<std::uint8_t> read_rows_u8(const std::string& name, std::uint64_t row_offset, std::uint64_t rows) const;
   double read_scalar(const std::string& name) const;
 
+  /// Names of the links in a group ("." for the root); empty if it is missing.
+  std::vector<std::string> list(const std::string& group) const;
+  /// Names of the attributes of an object ("." for the root).
+  std::vector<std::string> attr_names(const std::string& object = ".") const;
+  /// True if the attribute (which must exist) holds a string.
+  bool attr_is_string(const std::string& name) const;
+
   /// Flushes, closes and (kCreate) renames the temporary file over path().
   void commit();
 
