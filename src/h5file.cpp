@@ -325,6 +325,27 @@ void H5File::set_attr(const std::string& name, const std::string& value) {
   });
 }
 
+void H5File::set_attr_fixed_string(const std::string& name, const std::string& value, bool space_pad) {
+  collective_try(impl_->comm, [&] {
+    const FileState& m = *impl_;
+    m.need_write();
+    std::string obj, leaf;
+    split_name(name, obj, leaf);
+    if (!link_exists(m.file, obj)) throw Error(m.where("object '" + obj + "' not found"));
+    if (H5Aexists_by_name(m.file, obj.c_str(), leaf.c_str(), H5P_DEFAULT) > 0)
+      H5Adelete_by_name(m.file, obj.c_str(), leaf.c_str(), H5P_DEFAULT);
+    // Stored with two pad characters so that the reader's trimming is exercised.
+    std::string buf = value + std::string(2, space_pad ? ' ' : '\0');
+    Hid t(H5Tcopy(H5T_C_S1));
+    H5Tset_size(t, buf.size());
+    H5Tset_strpad(t, space_pad ? H5T_STR_SPACEPAD : H5T_STR_NULLPAD);
+    Hid space(H5Screate(H5S_SCALAR));
+    Hid a(H5Acreate_by_name(m.file, obj.c_str(), leaf.c_str(), t, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+    if (!a.ok() || H5Awrite(a, t, buf.data()) < 0)
+      throw Error(m.where("cannot write attribute '" + name + "' (" + h5_detail() + ")"));
+  });
+}
+
 namespace {
 template <class T>
 void set_number_attr(const FileState& m, const std::string& name, T value) {

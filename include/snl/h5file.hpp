@@ -35,6 +35,10 @@ class H5File {
   void set_attr(const std::string& name, const std::string& value);
   void set_attr(const std::string& name, std::int64_t value);
   void set_attr(const std::string& name, double value);
+  /// A fixed-length string attribute (as MATLAB and Fortran codes write them);
+  /// padded with spaces or NULs. For interoperability; set_attr writes the
+  /// variable-length strings h5py writes.
+  void set_attr_fixed_string(const std::string& name, const std::string& value, bool space_pad = false);
   std::string attr_string(const std::string& name) const;
   std::int64_t attr_int(const std::string& name) const;
   double attr_double(const std::string& name) const;

@@ -271,6 +271,17 @@ TEST(NetworkIoBroken, WrongFormat) {
   EXPECT_CONTAINS(read_error(path), "attribute 'format' is 'snl-result', expected 'snl-network'");
 }
 
+TEST(NetworkIo, FixedLengthStringAttributesAccepted) {
+  // MATLAB and other writers store fixed-length strings, NUL- or space-padded.
+  for (bool space : {false, true}) {
+    const std::string path = scratch("fixedstr.h5");
+    write_raw(path, sample(), {{"format", [&](H5File& f) { f.set_attr_fixed_string("format", "snl-network", space); }}});
+    EXPECT_EQ(read_error(path), "(no error)") << "space padded: " << space;
+    H5File f(path, MPI_COMM_SELF, H5File::Mode::kRead);
+    EXPECT_EQ(f.attr_string("format"), "snl-network");
+  }
+}
+
 TEST(NetworkIoBroken, FormatNotAString) {
   const std::string path = scratch("format_int.h5");
   write_raw(path, sample(), {{"format", [](H5File& f) { f.set_attr("format", std::int64_t{1}); }}});
