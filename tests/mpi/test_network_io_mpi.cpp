@@ -271,8 +271,9 @@ TEST(ResultIoMpi, FailedWriteLeavesExistingFileIntact) {
   }
   // No temporary left behind.
   std::string leftovers;
+  const std::string dir = test::scratch_dir(kWorld);  // collective: outside the rank-0 branch
   if (rank == 0) {
-    const std::string cmd = "ls '" + path_of("") + "' | grep -q 'keep_result.h5.tmp'";
+    const std::string cmd = "ls '" + dir + "' | grep -q 'keep_result.h5.tmp'";
     if (std::system(cmd.c_str()) == 0) leftovers = "temporary file left behind";
   }
   EXPECT_NO_THROW(agree(kWorld, leftovers));
