@@ -137,7 +137,7 @@ hid_t file_type() {
 void h5_quiet() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
 
 // The state lives outside the class so that helpers in this file can use it.
-struct FileState {
+struct H5FileState {
   std::string path;
   std::string tmp;  // kCreate: the file actually written until commit()
   MPI_Comm comm = MPI_COMM_NULL;
@@ -207,7 +207,7 @@ struct FileState {
     }
   }
 
-  ~FileState() {
+  ~H5FileState() {
     // Never throws: the destructor may run during unwinding on every rank.
     if (file >= 0) {
       H5Fclose(file);
@@ -218,7 +218,7 @@ struct FileState {
   }
 };
 
-struct H5File::Impl : FileState {};
+struct H5File::Impl : H5FileState {};
 
 H5File::H5File(const std::string& path, MPI_Comm comm, Mode mode) : impl_(std::make_unique<Impl>()) {
   h5_quiet();
@@ -327,7 +327,7 @@ void H5File::set_attr(const std::string& name, const std::string& value) {
 
 void H5File::set_attr_fixed_string(const std::string& name, const std::string& value, bool space_pad) {
   collective_try(impl_->comm, [&] {
-    const FileState& m = *impl_;
+    const H5FileState& m = *impl_;
     m.need_write();
     std::string obj, leaf;
     split_name(name, obj, leaf);
@@ -348,7 +348,7 @@ void H5File::set_attr_fixed_string(const std::string& name, const std::string& v
 
 namespace {
 template <class T>
-void set_number_attr(const FileState& m, const std::string& name, T value) {
+void set_number_attr(const H5FileState& m, const std::string& name, T value) {
   m.need_write();
   std::string obj, leaf;
   split_name(name, obj, leaf);
@@ -503,7 +503,7 @@ std::string transfer_rows(MPI_Comm comm, hid_t dset, hid_t memtype, int ndims, s
 }  // namespace
 
 template <class T>
-static void write_rows_impl(const FileState& m, const std::string& name, std::uint64_t total_rows,
+static void write_rows_impl(const H5FileState& m, const std::string& name, std::uint64_t total_rows,
                             std::uint64_t cols, std::uint64_t row_offset, const T* data, std::uint64_t rows) {
   std::string err;
   try {
@@ -568,7 +568,7 @@ void H5File::write_rows(const std::string& name, std::uint64_t total_rows, std::
 }
 
 template <class T>
-static void write_replicated_impl(const FileState& m, const std::string& name, const std::vector<T>& v) {
+static void write_replicated_impl(const H5FileState& m, const std::string& name, const std::vector<T>& v) {
   const std::uint64_t n = v.size();
   unsigned long long lo = n, hi = n;
   MPI_Allreduce(MPI_IN_PLACE, &lo, 1, MPI_UNSIGNED_LONG_LONG, MPI_MIN, m.comm);
@@ -610,7 +610,7 @@ void H5File::write_scalar(const std::string& name, double v) {
 }
 
 template <class T>
-static std::vector<T> read_rows_impl(const FileState& m, const std::string& name, std::uint64_t row_offset,
+static std::vector<T> read_rows_impl(const H5FileState& m, const std::string& name, std::uint64_t row_offset,
                                      std::uint64_t rows) {
   std::string err;
   Hid dset;
