@@ -35,6 +35,10 @@ class H5File {
   void set_attr(const std::string& name, const std::string& value);
   void set_attr(const std::string& name, std::int64_t value);
   void set_attr(const std::string& name, double value);
+  /// A fixed-length string attribute (as MATLAB and Fortran codes write them);
+  /// padded with spaces or NULs. For interoperability; set_attr writes the
+  /// variable-length strings h5py writes.
+  void set_attr_fixed_string(const std::string& name, const std::string& value, bool space_pad = false);
   std::string attr_string(const std::string& name) const;
   std::int64_t attr_int(const std::string& name) const;
   double attr_double(const std::string& name) const;
@@ -64,6 +68,13 @@ class H5File {
   std::vector<std::int64_t> read_rows_int(const std::string& name, std::uint64_t row_offset, std::uint64_t rows) const;
   std::vector<std::uint8_t> read_rows_u8(const std::string& name, std::uint64_t row_offset, std::uint64_t rows) const;
   double read_scalar(const std::string& name) const;
+
+  /// Names of the links in a group ("." for the root); empty if it is missing.
+  std::vector<std::string> list(const std::string& group) const;
+  /// Names of the attributes of an object ("." for the root).
+  std::vector<std::string> attr_names(const std::string& object = ".") const;
+  /// True if the attribute (which must exist) holds a string.
+  bool attr_is_string(const std::string& name) const;
 
   /// Flushes, closes and (kCreate) renames the temporary file over path().
   void commit();

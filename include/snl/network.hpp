@@ -53,6 +53,21 @@ struct Network {
 /// Returns normally when valid. Pure function, no MPI (fuzzable).
 void validate_network(const Network& net);
 
+/// The first violation of a network or slab: its message (empty if valid) and a
+/// key ordering violations by dataset (anchors, sensor_edges, sensor_ranges,
+/// anchor_edges, anchor_ranges, truth, sigma, localizability) then by global
+/// row, so that the collective reader reports the same "first" error on every rank.
+struct NetworkIssue {
+  std::int64_t key = 0;
+  std::string message;
+  bool ok() const { return message.empty(); }
+};
+/// whole == true: `net` must be a whole network (truth/flags have n rows).
+/// whole == false: a slab (rows [sensor_row_offset, ...) of truth/flags).
+/// validate_network(net) is check_network(net, whole) with whole decided from
+/// the slab bookkeeping (all offsets 0 and totals 0 or equal to local sizes).
+NetworkIssue check_network(const Network& net, bool whole);
+
 /// Result of merging duplicate measurements.
 struct MergeStats {
   GlobalId merged_sensor_pairs = 0;  ///< number of duplicate rows removed
