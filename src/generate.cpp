@@ -201,9 +201,9 @@ EdgeCsr sensor_edges_grid(const std::vector<double>& x, std::size_t n, std::uint
   float t = 0;
   for (;;) {
     rc = std::min(rc, diam * 1.001);
-    // Cells slightly larger than rc, so that every pair whose float distance can
-    // tie with a candidate's lies in adjacent cells.
-    grid.build(x, rc * (1 + 1e-6), 2.0 * static_cast<double>(n) + 16);
+    // Cells slightly larger than rc, so that every pair whose float squared
+    // distance can tie with a candidate's lies in adjacent cells.
+    grid.build(x, rc * (1 + 1e-5), 2.0 * static_cast<double>(n) + 16);
     cand.clear();
     cand.reserve(static_cast<std::size_t>(1.3 * static_cast<double>(k)) + 16);
     const double rc2 = rc * rc;
@@ -216,8 +216,9 @@ EdgeCsr sensor_edges_grid(const std::vector<double>& x, std::size_t n, std::uint
   std::vector<float>().swap(cand);
 
   // Count per smaller id, and the exact double threshold R2.
-  // Every pair with float(d2) <= t has d2 < rc^2 (1 + 1e-6)^2 <= h^2.
-  const double lim2 = 1.0 / (static_cast<double>(grid.g) * grid.g);
+  // Every pair with float(d2) <= t <= float(rc^2) has d2 <= rc^2 (1 + 2^-23) < lim2,
+  // and lies in the same or adjacent cells (cells >= rc (1 + 1e-5), or one cell).
+  const double lim2 = rc * rc * (1 + 1e-5);
   double r2 = 0;
   grid.visit_pairs(lim2, [&](std::uint32_t a, std::uint32_t b, double d2) {
     if (static_cast<float>(d2) <= t) {
