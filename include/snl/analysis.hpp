@@ -30,6 +30,8 @@ struct LocalizabilityReport {
   std::string summary() const;          ///< one paragraph for humans
 };
 constexpr GlobalId kRigidityLimit = 20000;
+/// Largest n for which cramer_rao_bound computes tr(J^-1) (selected inversion).
+constexpr GlobalId kCrlbLimit = 20000;
 
 /// Connectivity, anchoring and measurement counts; rigidity via the Fisher
 /// information matrix at `positions` (truth, if null and present) when

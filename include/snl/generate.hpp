@@ -28,11 +28,34 @@ struct GenerateReport {
   double radius = 0.0;           ///< sensor-sensor connection radius used
   double anchor_radius = 0.0;
   double achieved_avg_degree = 0.0;
+  std::uint64_t draw_seed = 0;   ///< seed of the draw returned (opt.seed for draw 1)
   LocalizabilityReport localizability;
 };
 
 /// Deterministic for given options. O(n) expected time (spatial hashing).
 /// Throws snl::Error if --localizable was demanded and no draw succeeded.
+///
+/// Conventions (so that independent implementations can reproduce a network):
+/// - sensor i coordinate c = uniform01(seed', kSensorPositions, i*p + c), where
+///   seed' = seed for draw 1 and random_bits(seed, kRedraw, d) for draw d+1;
+/// - random anchor k coordinate c = uniform01(seed', kAnchorPositions, k*p + c);
+/// - with k = round(avg_degree*n/2) and s_ij = float(||x_i - x_j||^2): t = the k-th
+///   smallest s_ij; edges are the pairs with s_ij <= t, equivalently with
+///   ||x_i - x_j||^2 <= R2 := max{||x_i - x_j||^2 : s_ij <= t}; radius = sqrt(R2);
+/// - anchor edge (i, k) iff ||x_i - a_k||^2 <= anchor_radius^2 (R2 by default);
+/// - ranges (003, eq. 28): |true + sigma * standard_normal(seed', kSensorNoise, i*n + j)|
+///   for i < j, and kAnchorNoise with counter i*m + k for anchor edges.
+/// Redraws: kYes redraws (up to max_draws, else throws) until the network is
+/// localizable (rigidity checked when n <= kRigidityLimit); kAuto does the same
+/// for n <= kRigidityLimit with at most min(max_draws, kAutoMaxDraws) draws and
+/// returns the last draw (flagged) instead of throwing; kNo never redraws.
+/// net.localizability always receives the per-sensor flags.
 Network generate_network(const GenerateOptions& opt, GenerateReport* report = nullptr);
+
+constexpr int kAutoMaxDraws = 100;
+
+/// Reference twin for tests: the same network, built with an O(n^2) all-pairs
+/// search instead of the spatial hash (small n only).
+Network generate_network_reference(const GenerateOptions& opt, GenerateReport* report = nullptr);
 
 }  // namespace snl
