@@ -2,7 +2,7 @@
 # Bad input end to end: every broken network (each spec rule, truncations,
 # random corruptions) ends in one clear error, a non-zero exit on 1 and 2
 # ranks, within seconds, and an existing output file is left untouched.
-source "$(dirname "$0")/common.sh"
+source "$(dirname "$0")/common.bash"
 "$SNL" generate -o "$T/net.h5" --sensors 60 --avg-degree 6 --sigma 0.05 --seed 3 -q
 "$PY" "$SNL_SOURCE_DIR/tools/make_bad_networks.py" "$T/net.h5" "$T/bad" --random 6 > "$T/list"
 "$SNL" solve "$T/net.h5" -o "$T/keep.h5" --max-iter 5 --tol 0 -q

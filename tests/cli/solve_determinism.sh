@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # snl solve gives bit-identical positions on 1, 2 and 3 ranks (all synchronous algorithms).
-source "$(dirname "$0")/common.sh"
+source "$(dirname "$0")/common.bash"
 "$SNL" generate -o "$T/net.h5" --sensors 400 --avg-degree 8 --sigma 0.05 --seed 11 -q
 for alg in relaxation mm pipeline bb; do
   for np in 1 2 3; do

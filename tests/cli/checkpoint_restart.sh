@@ -1,0 +1,46 @@
+#!/usr/bin/env bash
+# Checkpoint/restart: a run stopped by SIGUSR1 (what Slurm's --signal sends)
+# writes a checkpoint and exits with status 3; resuming on 1, 2 or 3 ranks gives
+# positions bit-identical to the uninterrupted run. Wrong network, wrong
+# options and damaged checkpoints are refused with a clear message.
+source "$(dirname "$0")/common.bash"
+"$SNL" generate -o "$T/net.h5" --sensors 3000 --avg-degree 7 --sigma 0.05 --seed 21 -q
+"$SNL" generate -o "$T/other.h5" --sensors 3000 --avg-degree 7 --sigma 0.05 --seed 22 -q
+ARGS=(--max-iter 4000 --tol 0 -q)
+for alg in pipeline bb; do
+  mpi 2 "$SNL" solve "$T/net.h5" -o "$T/ref.$alg.h5" --algorithm $alg "${ARGS[@]}"
+  # Stop a run with SIGUSR1 after it has written some checkpoints.
+  rm -f "$T/ck.h5"
+  set +e
+  "$MPIEXEC" "$MPIEXEC_NUMPROC_FLAG" 2 --oversubscribe "$SNL" solve "$T/net.h5" -o "$T/stopped.h5" \
+    --algorithm $alg "${ARGS[@]}" --checkpoint "$T/ck.h5" --checkpoint-every 100 &
+  pid=$!
+  for _ in $(seq 100); do [ -f "$T/ck.h5" ] && break; sleep 0.05; done
+  sleep 0.3
+  kill -USR1 $pid
+  wait $pid
+  rc=$?
+  set -e
+  [ $rc -eq 3 ] || fail "$alg: expected exit status 3 after SIGUSR1, got $rc"
+  [ -f "$T/stopped.h5" ] && fail "$alg: a stopped run must not write the result"
+  for np in 1 3; do
+    cp "$T/ck.h5" "$T/ck$np.h5"
+    mpi $np "$SNL" solve "$T/net.h5" -o "$T/res.$alg.$np.h5" --algorithm $alg "${ARGS[@]}" \
+      --checkpoint "$T/ck$np.h5" --checkpoint-every 100 --restart "$T/ck$np.h5"
+    h5diff "$T/ref.$alg.h5" "$T/res.$alg.$np.h5" /positions || fail "$alg: restart on $np ranks differs"
+  done
+done
+# Refusals: another network, other options, damaged files.
+expect_error() {  # expect_error PATTERN cmd...
+  local pat=$1; shift
+  set +e; "$@" > "$T/out" 2> "$T/err"; local rc=$?; set -e
+  [ $rc -ne 0 ] || fail "accepted: $*"
+  grep -q "$pat" "$T/err" || { cat "$T/err"; fail "message lacks '$pat': $*"; }
+}
+expect_error "another network" mpi 2 "$SNL" solve "$T/other.h5" -o "$T/x.h5" --algorithm bb "${ARGS[@]}" --restart "$T/ck.h5"
+expect_error "incompatible options" mpi 2 "$SNL" solve "$T/net.h5" -o "$T/x.h5" --algorithm bb --max-iter 99 -q --restart "$T/ck.h5"
+head -c 3000 "$T/ck.h5" > "$T/trunc.h5"
+expect_error "trunc.h5" mpi 2 "$SNL" solve "$T/net.h5" -o "$T/x.h5" --algorithm bb "${ARGS[@]}" --restart "$T/trunc.h5"
+expect_error "not an snl checkpoint" mpi 1 "$SNL" solve "$T/net.h5" -o "$T/x.h5" --algorithm bb "${ARGS[@]}" --restart "$T/net.h5"
+[ -f "$T/x.h5" ] && fail "a refused restart wrote output"
+echo "checkpoint_restart: ok"
