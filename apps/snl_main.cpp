@@ -100,6 +100,8 @@ int main(int argc, char** argv) {
   x->add_option("--relax-max-iter", ex.relax_max_iter, "relaxation iteration limit")->capture_default_str();
   x->add_option("--points", ex.points, "trajectory points per run")->capture_default_str();
   x->add_option("--bb-rounds", ex.bb_rounds, "consensus rounds per BB iteration")->capture_default_str();
+  x->add_option("--reach-rel", ex.reach_rel, "relative margin for 'reached the best final cost'")
+      ->capture_default_str();
   x->add_option("--seed", ex.seed, "seed of the noise draws and starts")->capture_default_str();
   x->add_option("--partition", ex.partition, "metis|block")->capture_default_str();
   x->add_flag("-q,--quiet", ex.quiet, "no progress output");

@@ -67,6 +67,7 @@ struct ExperimentCommand {
   std::int64_t relax_max_iter = 100000;
   std::int64_t points = 200;      ///< trajectory points per run
   int bb_rounds = 20;
+  double reach_rel = 1e-3;        ///< "reached the best cost" = within this relative margin
   std::uint64_t seed = 1;
   std::string partition = "metis";
   bool quiet = false;
