@@ -85,6 +85,10 @@ struct Summary {
   bool converged = false;
   double initial_cost = NAN, final_cost = NAN;  ///< of the last phase's own objective
   CostTerms costs;                              ///< at the final point
+  /// Eq. (22) bound on f* - f_hat*, valid only at the relaxation's minimizer:
+  /// evaluated where a relaxation phase ended (NaN if the run had none).
+  double gap_certificate = NAN;
+  double relaxed_optimum = NAN;  ///< f_hat where the relaxation phase ended
   ErrorMetrics errors;
   double messages_per_sensor = 0, reals_per_sensor = 0;
   std::int64_t mpi_bytes = 0;        ///< halo bytes sent, all ranks (algorithm exchanges)

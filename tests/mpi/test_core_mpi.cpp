@@ -169,6 +169,7 @@ TEST(Relaxation, NoiselessFullAnchorNetworkIsRecoveredExactly) {
   const Summary s = solver.solve(random_initial_positions(prob, 1), nullptr);
   EXPECT_LT(s.errors.rmse, 1e-6);
   EXPECT_LT(s.costs.certificate, 1e-10);
+  EXPECT_LT(s.gap_certificate, 1e-10);
   EXPECT_GT(s.costs.apriori, 1.0);
 }
 
