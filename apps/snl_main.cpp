@@ -55,7 +55,7 @@ int main(int argc, char** argv) {
   auto* s = app.add_subcommand("solve", "localize the sensors (run under mpirun for parallel runs)");
   s->add_option("network", solve.network, "network file")->required();
   s->add_option("-o,--output", solve.output, "result file")->required();
-  s->add_option("--algorithm", solve.solver.algorithm, "relaxation|mm|pipeline|bb")->capture_default_str();
+  s->add_option("--algorithm", solve.solver.algorithm, "relaxation|mm|pipeline|bb|pm|async|async-exact")->capture_default_str();
   s->add_option("--max-iter", solve.solver.max_iter, "iterations per phase")->capture_default_str();
   s->add_option("--tol", solve.solver.tol, "relative improvement tolerance (0: run --max-iter iterations)")
       ->capture_default_str();

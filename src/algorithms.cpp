@@ -429,6 +429,7 @@ std::unique_ptr<Algorithm> make_algorithm(const std::string& name, LocalizationP
   if (name == "relaxation") return std::make_unique<Relaxation>(prob);
   if (name == "mm") return std::make_unique<MM>(prob);
   if (name == "bb") return std::make_unique<BB>(prob, opt.bb_rounds);
+  if (auto a = make_sequential_algorithm(name, prob, opt)) return a;
   throw Error("unknown algorithm '" + name + "'");
 }
 

@@ -68,9 +68,9 @@ class ProgressPrinter : public IterationCallback {
 };
 
 int phase_code(const std::string& p) {
-  if (p == "relaxation") return 0;
-  if (p == "mm") return 1;
-  if (p == "bb") return 2;
+  const char* names[] = {"relaxation", "mm", "bb", "pm", "async", "async-exact"};
+  for (int c = 0; c < 6; ++c)
+    if (p == names[c]) return c;
   return 9;
 }
 
@@ -313,7 +313,7 @@ int run_solve(const SolveCommand& cmd, MPI_Comm comm) {
                     {"message", s.message},
                     {"network", cmd.network},
                     {"partition", rep.partition.method},
-                    {"history_phase_codes", "0=relaxation 1=mm 2=bb"}};
+                    {"history_phase_codes", "0=relaxation 1=mm 2=bb 3=pm 4=async 5=async-exact"}};
   r.double_attrs = {{"ml_cost", s.costs.ml},
                     {"relaxed_cost", s.costs.relaxed},
                     {"gap_certificate", s.gap_certificate},

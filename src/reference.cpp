@@ -1,5 +1,7 @@
 #include "snl/reference.hpp"
 
+#include "snl/random.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -171,6 +173,129 @@ std::vector<double> mm(const Network& net, const std::vector<double>& x0, int it
     y.swap(yn);
     w.swap(wn);
     if (surrogate) surrogate->push_back(F());
+  }
+  return x;
+}
+
+namespace {
+struct Adj {
+  std::vector<std::vector<std::pair<GlobalId, double>>> nbr;  // (neighbour, range)
+  std::vector<std::vector<std::pair<GlobalId, double>>> anc;  // (anchor, range)
+};
+Adj adjacency(const Network& net) {
+  Adj a;
+  a.nbr.resize(net.num_sensors);
+  a.anc.resize(net.num_sensors);
+  for (std::size_t e = 0; e < net.sensor_ranges.size(); ++e) {
+    a.nbr[net.sensor_edges[2 * e]].push_back({net.sensor_edges[2 * e + 1], net.sensor_ranges[e]});
+    a.nbr[net.sensor_edges[2 * e + 1]].push_back({net.sensor_edges[2 * e], net.sensor_ranges[e]});
+  }
+  for (std::size_t e = 0; e < net.anchor_ranges.size(); ++e)
+    a.anc[net.anchor_edges[2 * e]].push_back({net.anchor_edges[2 * e + 1], net.anchor_ranges[e]});
+  for (auto& l : a.nbr) std::sort(l.begin(), l.end());
+  for (auto& l : a.anc) std::sort(l.begin(), l.end());
+  return a;
+}
+void project_ball(const double* z, const double* c, double rho, int p, double* acc) {
+  const double d = dist(z, c, p);
+  const double f = d > rho ? rho / d : 1.0;
+  for (int k = 0; k < p; ++k) acc[k] += c[k] + f * (z[k] - c[k]);
+}
+double local_f(const Network& net, const Adj& a, const std::vector<double>& x, GlobalId i, const double* v,
+               double* g) {
+  const int p = net.dim;
+  double f = 0;
+  for (int k = 0; k < p; ++k) g[k] = 0;
+  auto term = [&](const double* c, double rho) {
+    const double d = dist(v, c, p);
+    if (d <= rho) return;
+    f += 0.5 * (d - rho) * (d - rho);
+    for (int k = 0; k < p; ++k) g[k] += (1 - rho / d) * (v[k] - c[k]);
+  };
+  for (auto& [j, r] : a.nbr[i]) term(&x[j * p], r);
+  for (auto& [k, r] : a.anc[i]) term(&net.anchors[k * p], r);
+  return f;
+}
+}  // namespace
+
+std::vector<int> coloring(const Network& net) {
+  const Adj a = adjacency(net);
+  const GlobalId n = net.num_sensors;
+  std::vector<std::uint64_t> prio(n);
+  for (GlobalId v = 0; v < n; ++v) prio[v] = mix64(static_cast<std::uint64_t>(v) ^ 0x5bd1e995ULL);
+  // Sequentially in decreasing priority: the same colours as the parallel rounds.
+  std::vector<GlobalId> order(n);
+  for (GlobalId v = 0; v < n; ++v) order[v] = v;
+  std::sort(order.begin(), order.end(), [&](GlobalId x, GlobalId y) { return prio[x] != prio[y] ? prio[x] > prio[y] : x > y; });
+  std::vector<int> c(n, -1);
+  for (GlobalId v : order) {
+    std::vector<char> used(a.nbr[v].size() + 2, 0);
+    for (auto& [u, r] : a.nbr[v])
+      if (c[u] >= 0 && c[u] < static_cast<int>(used.size())) used[c[u]] = 1;
+    int k = 0;
+    while (used[k]) ++k;
+    c[v] = k;
+  }
+  return c;
+}
+
+std::vector<double> pm(const Network& net, const std::vector<double>& x0, int sweeps) {
+  const int p = net.dim;
+  const Adj a = adjacency(net);
+  const auto col = coloring(net);
+  std::vector<GlobalId> order(net.num_sensors);
+  for (GlobalId v = 0; v < net.num_sensors; ++v) order[v] = v;
+  std::stable_sort(order.begin(), order.end(), [&](GlobalId x, GlobalId y) { return col[x] < col[y]; });
+  std::vector<double> x = x0;
+  for (int s = 0; s < sweeps; ++s)
+    for (GlobalId i : order) {
+      const double deg = double(a.nbr[i].size() + a.anc[i].size());
+      if (deg == 0) continue;
+      double acc[3] = {0, 0, 0};
+      for (auto& [j, r] : a.nbr[i]) project_ball(&x[i * p], &x[j * p], r, p, acc);
+      for (auto& [k, r] : a.anc[i]) project_ball(&x[i * p], &net.anchors[k * p], r, p, acc);
+      for (int k = 0; k < p; ++k) x[i * p + k] = acc[k] / deg;
+    }
+  return x;
+}
+
+std::vector<double> async(const Network& net, const std::vector<double>& x0, long activations, std::uint64_t seed,
+                          bool exact, std::vector<double>* fhat) {
+  const int p = net.dim;
+  const Adj a = adjacency(net);
+  const double L = relaxation_lipschitz(net);
+  std::vector<double> x = x0;
+  if (fhat) fhat->assign(1, relaxed_cost(net, x));
+  for (long k = 0; k < activations; ++k) {
+    GlobalId i = static_cast<GlobalId>(uniform01(seed, RngStream::kAsyncClock, k) * double(net.num_sensors));
+    i = std::min<GlobalId>(i, net.num_sensors - 1);
+    double g[3];
+    if (!exact) {
+      local_f(net, a, x, i, &x[i * p], g);
+      for (int c = 0; c < p; ++c) x[i * p + c] -= g[c] / L;
+    } else {
+      const double Li = double(a.nbr[i].size() + a.anc[i].size());
+      if (Li > 0) {
+        double z[3], zm[3], w[3];
+        for (int c = 0; c < p; ++c) z[c] = zm[c] = x[i * p + c];
+        const double f0 = local_f(net, a, x, i, &x[i * p], g);
+        for (int l = 1; l <= 500; ++l) {
+          double step = 0, nz = 0;
+          for (int c = 0; c < p; ++c) w[c] = z[c] + (double(l) - 2) / (double(l) + 1) * (z[c] - zm[c]);
+          local_f(net, a, x, i, w, g);
+          for (int c = 0; c < p; ++c) {
+            zm[c] = z[c];
+            z[c] = w[c] - g[c] / Li;
+            step += (z[c] - zm[c]) * (z[c] - zm[c]);
+            nz += z[c] * z[c];
+          }
+          if (step <= 1e-24 * (1 + nz)) break;
+        }
+        if (local_f(net, a, x, i, z, g) <= f0)
+          for (int c = 0; c < p; ++c) x[i * p + c] = z[c];
+      }
+    }
+    if (fhat) fhat->push_back(relaxed_cost(net, x));
   }
   return x;
 }

@@ -24,10 +24,10 @@ const char* to_string(TerminationType t) {
 }
 
 std::string SolverOptions::validate() const {
-  static const char* known[] = {"relaxation", "mm", "pipeline", "bb"};
+  static const char* known[] = {"relaxation", "mm", "pipeline", "bb", "pm", "async", "async-exact"};
   if (std::find_if(std::begin(known), std::end(known), [&](const char* k) { return algorithm == k; }) ==
       std::end(known))
-    return "unknown --algorithm '" + algorithm + "' (expected relaxation, mm, pipeline or bb)";
+    return "unknown --algorithm '" + algorithm + "' (expected relaxation, mm, pipeline, bb, pm, async or async-exact)";
   if (max_iter < 0) return "--max-iter must be >= 0";
   if (!(tol >= 0) || !std::isfinite(tol)) return "--tol must be a finite number >= 0";
   if (!(grad_tol >= 0) || !std::isfinite(grad_tol)) return "--grad-tol must be a finite number >= 0";
@@ -58,8 +58,13 @@ Solver::Solver(LocalizationProblem& prob, SolverOptions opt) : prob_(prob), opt_
 
 namespace {
 
-int phase_code(const std::string& p) { return p == "relaxation" ? 0 : p == "mm" ? 1 : p == "bb" ? 2 : 9; }
-const char* phase_name(int c) { return c == 0 ? "relaxation" : c == 1 ? "mm" : c == 2 ? "bb" : "?"; }
+const char* kPhaseNames[] = {"relaxation", "mm", "bb", "pm", "async", "async-exact"};
+int phase_code(const std::string& p) {
+  for (int c = 0; c < 6; ++c)
+    if (p == kPhaseNames[c]) return c;
+  return 9;
+}
+const char* phase_name(int c) { return c >= 0 && c < 6 ? kPhaseNames[c] : "?"; }
 
 // History as columns (checkpoints) and back.
 const char* kHistoryColumns[] = {"phase",     "iteration", "total_iteration", "cost",  "ml_cost", "rel_change",

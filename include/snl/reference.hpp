@@ -2,6 +2,7 @@
 // Reference twins: plain serial implementations of the kernels on a whole
 // network held by one process, written independently of the distributed code
 // (edge-list loops, no partitioning, no halo), for tests to compare against.
+#include <cstdint>
 #include <vector>
 
 #include "snl/network.hpp"
@@ -20,5 +21,14 @@ std::vector<double> nesterov(const Network& net, const std::vector<double>& x0, 
 /// iteration (index 0: at the start) go to *surrogate if non-null.
 std::vector<double> mm(const Network& net, const std::vector<double>& x0, int iters,
                        std::vector<double>* surrogate = nullptr);
+
+/// Jones-Plassmann colouring with the distributed one's priorities.
+std::vector<int> coloring(const Network& net);
+/// `sweeps` sweeps of the projection method in (colour, id) order.
+std::vector<double> pm(const Network& net, const std::vector<double>& x0, int sweeps);
+/// `activations` activations of 003 Algorithm 2 (exact or eq. 20), one at a
+/// time; f_hat after every activation goes to *fhat if non-null.
+std::vector<double> async(const Network& net, const std::vector<double>& x0, long activations, std::uint64_t seed,
+                          bool exact, std::vector<double>* fhat = nullptr);
 
 }  // namespace snl::reference

@@ -26,7 +26,7 @@ enum class TerminationType {
 const char* to_string(TerminationType t);
 
 struct SolverOptions {
-  /// relaxation | mm | pipeline | bb
+  /// relaxation | mm | pipeline | bb | pm | async | async-exact
   std::string algorithm = "pipeline";
   /// Iterations per phase (the pipeline has two phases).
   std::int64_t max_iter = 10000;
@@ -128,7 +128,14 @@ class Algorithm {
   virtual void load(const StateReader& r) = 0;
 };
 
-/// Factory: "relaxation", "mm", "bb". Throws snl::Error for an unknown name.
+/// PM and the asynchronous methods (src/alg_sequential.cpp); nullptr for other names.
+std::unique_ptr<Algorithm> make_sequential_algorithm(const std::string& name, LocalizationProblem& prob,
+                                                     const SolverOptions& opt);
+/// Deterministic Jones-Plassmann colouring (priorities hashed from global ids):
+/// a colour per local node (owned and ghost); neighbours never share one.
+std::vector<int> jones_plassmann_coloring(DistGraph& g);
+
+/// Factory: relaxation, mm, bb, pm, async, async-exact. Throws snl::Error for an unknown name.
 std::unique_ptr<Algorithm> make_algorithm(const std::string& name, LocalizationProblem& prob,
                                           const SolverOptions& opt);
 

@@ -123,7 +123,7 @@ TEST(MM, MatchesSerialReferenceAndSurrogateNeverIncreases) {
 
 TEST(Determinism, BitIdenticalForOneTwoThreeRanks) {
   const Network w = make_network({.n = 120, .dim = 2, .radius = 0.2, .anchor_radius = 0.3, .sigma = 0.05});
-  for (const char* alg : {"relaxation", "mm", "bb", "pipeline"}) {
+  for (const char* alg : {"relaxation", "mm", "bb", "pipeline", "pm", "async", "async-exact"}) {
     for (PartitionMethod pm : {PartitionMethod::kMetis, PartitionMethod::kBlock}) {
       const auto ref = run(MPI_COMM_SELF, w, alg, 40, pm);
       for (int k = 2; k <= world_size(); ++k) {
@@ -137,6 +137,29 @@ TEST(Determinism, BitIdenticalForOneTwoThreeRanks) {
         MPI_Comm_free(&sub);
       }
     }
+  }
+}
+
+TEST(SequentialMethods, PMAndAsyncMatchTheirOneAtATimeReference) {
+  const Network w = merged(make_network({.n = 70, .dim = 2, .radius = 0.25, .anchor_radius = 0.4, .sigma = 0.05}));
+  LocalizationProblem prob(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kMetis, nullptr);
+  const auto x0 = allgather_positions(prob, random_initial_positions(prob, 3));
+  // Colours: neighbours differ, and the distributed colouring equals the serial one.
+  const auto col = jones_plassmann_coloring(prob.graph());
+  const auto ref_col = reference::coloring(w);
+  for (LocalId v = 0; v < prob.num_owned(); ++v) {
+    EXPECT_EQ(col[v], ref_col[prob.graph().global_id(v)]);
+    for (auto e = prob.graph().offsets()[v]; e < prob.graph().offsets()[v + 1]; ++e)
+      EXPECT_NE(col[v], col[prob.graph().adjacency()[e]]);
+  }
+  const auto xp = run(MPI_COMM_WORLD, w, "pm", 25);
+  const auto xpr = reference::pm(w, x0, 25);
+  for (std::size_t t = 0; t < xp.size(); ++t) EXPECT_NEAR(xp[t], xpr[t], 1e-12) << t;
+  for (bool exact : {false, true}) {
+    const auto xa = run(MPI_COMM_WORLD, w, exact ? "async-exact" : "async", 6);
+    // SolverOptions::seed (1 by default) keys the activation sequence.
+    const auto xar = reference::async(w, x0, 6 * w.num_sensors, 1, exact);
+    for (std::size_t t = 0; t < xa.size(); ++t) EXPECT_NEAR(xa[t], xar[t], 1e-10) << t << (exact ? " exact" : "");
   }
 }
 
