@@ -161,7 +161,37 @@ SpMat fisher_information(const Network& net, const std::vector<double>& x) {
   return J;
 }
 
-using Ldlt = Eigen::SimplicialLDLT<SpMat, Eigen::Lower, Eigen::AMDOrdering<int>>;
+// SimplicialLDLT that exposes the symbolic factor after analyzePattern, so the
+// cost of a factorisation can be judged before paying for it.
+class Ldlt : public Eigen::SimplicialLDLT<SpMat, Eigen::Lower, Eigen::AMDOrdering<int>> {
+ public:
+  // Work of the numeric factorisation (and of the selected inversion): sum over
+  // columns of nnz(L_j)^2. Valid after analyzePattern.
+  double symbolic_work() const {
+    const int* outer = this->m_matrix.outerIndexPtr();
+    double w = 0;
+    for (Eigen::Index j = 0; j < this->m_matrix.cols(); ++j) {
+      const double c = outer[j + 1] - outer[j];
+      w += c * c;
+    }
+    return w;
+  }
+};
+
+// Above this work (sum nnz(L_j)^2: ~2 s to factor, ~10 s for the CRLB trace)
+// rigidity and the CRLB are refused rather than stalling a run: dense or 3D
+// networks near kRigidityLimit fill in heavily.
+constexpr double kFactorWorkLimit = 2e9;
+
+// Factorises J unless that is too expensive; false when refused.
+bool factorize_within_budget(const SpMat& J, Ldlt& ldlt, double* work = nullptr) {
+  ldlt.analyzePattern(J);
+  const double w = ldlt.symbolic_work();
+  if (work) *work = w;
+  if (w > kFactorWorkLimit) return false;
+  ldlt.factorize(J);
+  return true;
+}
 
 // Positive definite up to roundoff: the factorisation succeeded and every pivot
 // of D is positive and above 1e-10 of the largest (an exactly singular J gives
@@ -185,13 +215,14 @@ std::vector<GlobalId> flexible_sensors(const SpMat& J, int p) {
   SpMat I(N, N);
   I.setIdentity();
   const SpMat Jr = J + (1e-9 * dmax) * I;
-  Ldlt ldlt(Jr);
+  Ldlt ldlt;
+  ldlt.compute(Jr);
   std::vector<char> flex(static_cast<std::size_t>(N / p), 0);
   if (ldlt.info() != Eigen::Success) return {};
   for (std::uint64_t trial = 0; trial < 2; ++trial) {
     Eigen::VectorXd v(N);
     for (int r = 0; r < N; ++r) v[r] = standard_normal(0x5eed, RngStream::kInit, trial * N + r);
-    for (int it = 0; it < 4; ++it) {
+    for (int it = 0; it < 8; ++it) {
       v = ldlt.solve(v);
       v /= v.norm();
     }
@@ -212,7 +243,10 @@ std::vector<GlobalId> flexible_sensors(const SpMat& J, int p) {
 
 // tr(J^-1) from the factor J = P^T L D L^T P by selected inversion (Takahashi
 // equations): Z = D^-1 L^-1 + (I - L^T) Z, evaluated backwards only on the
-// pattern of L, which is closed under the recurrence. Cost sum_j nnz(L_j)^2.
+// pattern of L, which is closed under the recurrence: for rows r_a < r_b of
+// column j, Z(r_b, r_a) sits in column r_a, whose rows (sorted) include every
+// later row of column j, so one merge walk per r_a finds them all.
+// Cost sum_j nnz(L_j)^2 / 2.
 double trace_of_inverse(const Ldlt& ldlt) {
   const SpMat& L = ldlt.matrixL().nestedExpression();
   const auto& D = ldlt.vectorD();
@@ -223,26 +257,25 @@ double trace_of_inverse(const Ldlt& ldlt) {
   const double* lx = L.valuePtr();
   auto col_end = [&](int c) { return nnz ? outer[c] + nnz[c] : outer[c + 1]; };
   std::vector<double> z(static_cast<std::size_t>(outer[N]), 0.0), zd(static_cast<std::size_t>(N), 0.0);
-  auto lookup = [&](int r, int c) -> double {  // Z(r, c) with r != c, both > current column
-    if (r < c) std::swap(r, c);
-    const int* b = inner + outer[c];
-    const int* e = inner + col_end(c);
-    const int* it = std::lower_bound(b, e, r);
-    return (it != e && *it == r) ? z[static_cast<std::size_t>(it - inner)] : 0.0;
-  };
   double trace = 0;
   for (int j = N - 1; j >= 0; --j) {
     const int s = outer[j], e = col_end(j);
-    double diag = 1.0 / D[j];
+    for (int a = s; a < e; ++a) z[a] = -lx[a] * zd[inner[a]];
     for (int a = s; a < e; ++a) {
       const int ra = inner[a];
-      double sum = 0;
-      for (int b = s; b < e; ++b) {
+      int q = outer[ra];
+      const int qe = col_end(ra);
+      for (int b = a + 1; b < e; ++b) {
         const int rb = inner[b];
-        sum += lx[b] * (ra == rb ? zd[ra] : lookup(ra, rb));
+        while (q < qe && inner[q] < rb) ++q;
+        if (q == qe) break;
+        if (inner[q] != rb) continue;  // cannot happen for a symbolic factor
+        const double zab = z[q];       // Z(r_b, r_a)
+        z[a] -= lx[b] * zab;
+        z[b] -= lx[a] * zab;
       }
-      z[a] = -sum;
     }
+    double diag = 1.0 / D[j];
     for (int a = s; a < e; ++a) diag -= lx[a] * z[a];
     zd[j] = diag;
     trace += diag;
@@ -295,13 +328,15 @@ LocalizabilityReport analyze_localizability(const Network& net, bool check_rigid
   // Infinitesimal rigidity of the anchored framework <=> J positive definite.
   const std::vector<double>* x = positions_or_truth(net, positions);
   if (check_rigidity && x && net.num_sensors <= kRigidityLimit) {
-    r.rigidity_checked = true;
     const SpMat J = fisher_information(net, *x);
-    Ldlt ldlt(J);
-    r.rigid = positive_definite(ldlt);
-    if (!r.rigid) {
-      r.not_rigid = flexible_sensors(J, p);
-      for (const GlobalId i : r.not_rigid) r.flags[static_cast<std::size_t>(i)] |= kNotRigid;
+    Ldlt ldlt;
+    if (factorize_within_budget(J, ldlt)) {
+      r.rigidity_checked = true;
+      r.rigid = positive_definite(ldlt);
+      if (!r.rigid) {
+        r.not_rigid = flexible_sensors(J, p);
+        for (const GlobalId i : r.not_rigid) r.flags[static_cast<std::size_t>(i)] |= kNotRigid;
+      }
     }
   }
   return r;
@@ -374,7 +409,15 @@ CrlbResult cramer_rao_bound(const Network& net, double sigma) {
   }
   // J(sigma) = J(1) / sigma^2, so tr(J(sigma)^-1) = sigma^2 tr(J(1)^-1).
   const SpMat J = fisher_information(net, *x);
-  Ldlt ldlt(J);
+  Ldlt ldlt;
+  double work = 0;
+  if (!factorize_within_budget(J, ldlt, &work)) {
+    std::ostringstream os;
+    os << "the sparse factor of the Fisher information is too dense (work " << work << " > " << kFactorWorkLimit
+       << "); the CRLB is refused for this network";
+    res.reason = os.str();
+    return res;
+  }
   if (!positive_definite(ldlt)) {
     res.reason = "anchored network is not rigid (the Fisher information matrix is singular)";
     return res;

@@ -35,13 +35,17 @@ constexpr GlobalId kCrlbLimit = 20000;
 
 /// Connectivity, anchoring and measurement counts; rigidity via the Fisher
 /// information matrix at `positions` (truth, if null and present) when
-/// check_rigidity and n <= kRigidityLimit.
+/// check_rigidity and n <= kRigidityLimit (and the sparse factor of J is not
+/// too dense: heavy fill, e.g. 3D networks near the limit, leaves
+/// rigidity_checked false). not_rigid: the support of the null space of J.
 LocalizabilityReport analyze_localizability(const Network& net, bool check_rigidity,
                                             const std::vector<double>* positions = nullptr);
 
 /// Cramér-Rao lower bound (Patwari et al. 2005, equal sigma) at the true
 /// positions: RMSE_CRLB = sqrt(tr(J^-1)/n). `defined` is false (with a reason)
-/// when J is singular (the anchored network is not rigid) or truth is missing.
+/// when J is singular (the anchored network is not rigid) or truth is missing,
+/// or n > kCrlbLimit or the factor of J is too dense. tr(J^-1) is computed
+/// exactly by selected inversion on the sparse LDL^T factor.
 struct CrlbResult {
   bool defined = false;
   double rmse = 0.0;
