@@ -93,13 +93,16 @@ int main(int argc, char** argv) {
   x->add_option("--h5", ex.h5, "HDF5 copy of the per-trial table");
   x->add_option("--sigmas", ex.sigmas, "noise levels")->delimiter(',')->capture_default_str();
   x->add_option("--trials", ex.trials, "noise draws per sigma")->capture_default_str();
-  x->add_option("--algorithms", ex.algorithms, "refinements run from the relaxation output (mm,bb)")
+  x->add_option("--algorithms", ex.algorithms, "methods (relaxation,mm,bb,pm,async,async-exact)")
       ->delimiter(',')->capture_default_str();
   x->add_option("--budget", ex.budget, "communications (reals per sensor) per refinement")->capture_default_str();
   x->add_option("--relax-tol", ex.relax_tol, "relaxation relative-improvement tolerance")->capture_default_str();
   x->add_option("--relax-max-iter", ex.relax_max_iter, "relaxation iteration limit")->capture_default_str();
   x->add_option("--points", ex.points, "trajectory points per run")->capture_default_str();
   x->add_option("--bb-rounds", ex.bb_rounds, "consensus rounds per BB iteration")->capture_default_str();
+  x->add_option("--start", ex.start, "relaxation (refinements from its output) or random (all from one random start)")
+      ->capture_default_str();
+  x->add_option("--tol", ex.tol, "methods' relative-improvement tolerance (0: whole budget)")->capture_default_str();
   x->add_option("--reach-rel", ex.reach_rel, "relative margin for 'reached the best final cost'")
       ->capture_default_str();
   x->add_option("--seed", ex.seed, "seed of the noise draws and starts")->capture_default_str();

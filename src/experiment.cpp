@@ -48,8 +48,10 @@ void run_experiment(const ExperimentCommand& cmd, MPI_Comm comm) {
     if (!(s >= 0) || !std::isfinite(s)) throw Error("--sigmas must be finite and >= 0");
   if (!(cmd.budget > 0)) throw Error("--budget must be > 0");
   for (const auto& a : cmd.algorithms)
-    if (a != "mm" && a != "bb" && a != "relaxation")
-      throw Error("--algorithms takes mm, bb (refinements) and relaxation (more iterations of it)");
+    if (a != "mm" && a != "bb" && a != "relaxation" && a != "pm" && a != "async" && a != "async-exact")
+      throw Error("--algorithms takes relaxation, mm, bb, pm, async, async-exact");
+  if (cmd.start != "relaxation" && cmd.start != "random") throw Error("--start must be relaxation or random");
+  if (!(cmd.tol >= 0)) throw Error("--tol must be >= 0");
   check_output_path(cmd.output, comm);
   if (!cmd.trajectory.empty()) check_output_path(cmd.trajectory, comm);
   if (!cmd.h5.empty()) check_output_path(cmd.h5, comm);
@@ -80,21 +82,27 @@ void run_experiment(const ExperimentCommand& cmd, MPI_Comm comm) {
       ro.max_iter = cmd.relax_max_iter;
       ro.history_every = cmd.relax_max_iter + 1;
       ro.seed = key;
-      std::vector<double> xr;
-      Summary rs = Solver(*prob, ro).solve(random_initial_positions(*prob, key), &xr);
-      rows.push_back({sigma, t, "relaxation", rs.iterations, rs.messages_per_sensor, rs.reals_per_sensor, rs.costs.ml,
-                      rs.costs.ml, rs.errors.rmse, rs.errors.mpe});
+      std::vector<double> xr = random_initial_positions(*prob, key);
+      double ml_start = NAN;
+      if (cmd.start == "relaxation") {
+        Summary rs = Solver(*prob, ro).solve(std::vector<double>(xr), &xr);
+        rows.push_back({sigma, t, "relaxation", rs.iterations, rs.messages_per_sensor, rs.reals_per_sensor,
+                        rs.costs.ml, rs.costs.ml, rs.errors.rmse, rs.errors.mpe});
+        ml_start = rs.costs.ml;
+      }
       for (const auto& alg : cmd.algorithms) {
         SolverOptions o;
         o.algorithm = alg;
-        o.tol = 0;
+        o.tol = cmd.tol;
+        o.seed = key;
         o.bb_rounds = cmd.bb_rounds;
         const double per_it = alg == "bb" ? p + 2.0 * cmd.bb_rounds : p;
         o.max_iter = static_cast<std::int64_t>(std::floor(cmd.budget / per_it));
         o.history_every = std::max<std::int64_t>(1, o.max_iter / std::max<std::int64_t>(1, cmd.points));
         std::vector<double> x;
         Summary s = Solver(*prob, o).solve(xr, &x);
-        rows.push_back({sigma, t, alg, s.iterations, s.messages_per_sensor, s.reals_per_sensor, rs.costs.ml,
+        const double start_ml = cmd.start == "relaxation" ? ml_start : s.history.front().ml_cost;
+        rows.push_back({sigma, t, alg, s.iterations, s.messages_per_sensor, s.reals_per_sensor, start_ml,
                         s.costs.ml, s.errors.rmse, s.errors.mpe});
         if (!cmd.trajectory.empty())
           for (const auto& h : s.history)
@@ -122,7 +130,7 @@ void run_experiment(const ExperimentCommand& cmd, MPI_Comm comm) {
     a.ml += r.ml;
     a.reals += r.reals;
     a.count += 1;
-    if (r.algorithm != "relaxation" && r.ml > r.ml_start) a.worse += 1;
+    if (r.ml > r.ml_start) a.worse += 1;
   }
   for (std::size_t si = 0; si < cmd.sigmas.size(); ++si)
     for (int t = 0; t < cmd.trials; ++t) {
@@ -166,7 +174,7 @@ void run_experiment(const ExperimentCommand& cmd, MPI_Comm comm) {
     H5File f(cmd.h5, comm, H5File::Mode::kCreate);
     f.set_attr("format", std::string("snl-experiment"));
     f.set_attr("network", cmd.network);
-    f.set_attr("algorithms", std::string("0=relaxation 1=mm 2=bb"));
+    f.set_attr("algorithms", std::string("0=relaxation 1=mm 2=bb 3=pm 4=async 5=async-exact"));
     auto col = [&](const char* name, auto get) {
       std::vector<double> v;
       for (const auto& r : rows) v.push_back(get(r));
@@ -174,7 +182,12 @@ void run_experiment(const ExperimentCommand& cmd, MPI_Comm comm) {
     };
     col("sigma", [](const Row& r) { return r.sigma; });
     col("trial", [](const Row& r) { return double(r.trial); });
-    col("algorithm", [](const Row& r) { return r.algorithm == "relaxation" ? 0.0 : r.algorithm == "mm" ? 1.0 : 2.0; });
+    col("algorithm", [](const Row& r) {
+      const char* names[] = {"relaxation", "mm", "bb", "pm", "async", "async-exact"};
+      for (int c = 0; c < 6; ++c)
+        if (r.algorithm == names[c]) return double(c);
+      return 9.0;
+    });
     col("iterations", [](const Row& r) { return double(r.iterations); });
     col("reals_per_sensor", [](const Row& r) { return r.reals; });
     col("ml_cost_start", [](const Row& r) { return r.ml_start; });
@@ -188,7 +201,7 @@ void run_experiment(const ExperimentCommand& cmd, MPI_Comm comm) {
                 "mean ML cost", "reals/sensor", "worse", "reals to within reach_rel of the best final cost");
     for (const auto& [k, a] : agg) {
       std::string reach;
-      if (k.second != "relaxation" && a.reach_trials > 0)
+      if (a.reach_trials > 0)
         reach = csv_num(a.reach_count ? a.reach_reals / a.reach_count : NAN) + " (reached in " +
                 std::to_string(a.reach_count) + "/" + std::to_string(a.reach_trials) + " trials)";
       std::printf("%-7g %-11s %7d %11.5g %11.5g %13.6g %13.6g %8d %s\n", k.first, k.second.c_str(), a.count,

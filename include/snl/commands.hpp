@@ -67,7 +67,9 @@ struct ExperimentCommand {
   std::int64_t relax_max_iter = 100000;
   std::int64_t points = 200;      ///< trajectory points per run
   int bb_rounds = 20;
-  double reach_rel = 1e-3;        ///< "reached the best cost" = within this relative margin
+  double reach_rel = 1e-3;
+  std::string start = "relaxation";  ///< methods start from the relaxation's output, or from random
+  double tol = 0;                 ///< methods' relative-improvement tolerance (0: spend the whole budget)        ///< "reached the best cost" = within this relative margin
   std::uint64_t seed = 1;
   std::string partition = "metis";
   bool quiet = false;
