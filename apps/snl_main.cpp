@@ -61,7 +61,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   s->add_option("--grad-tol", solve.solver.grad_tol, "gradient norm tolerance (0: off)")->capture_default_str();
   s->add_option("--init", solve.init, "'random' or a file with dataset positions [n,p]")->capture_default_str();
-  s->add_option("--seed", solve.solver.seed, "seed of --init random")->capture_default_str();
+  s->add_option("--seed", solve.solver.seed, "seed of --init random and of the async activation clock")->capture_default_str();
   s->add_option("--partition", solve.partition, "metis|block")->capture_default_str();
   s->add_option("--history-every", solve.solver.history_every, "record history every K iterations (0: auto)")
       ->capture_default_str();

@@ -6,14 +6,18 @@
 source "$(dirname "$0")/common.bash"
 "$SNL" generate -o "$T/net.h5" --sensors 3000 --avg-degree 7 --sigma 0.05 --seed 21 -q
 "$SNL" generate -o "$T/other.h5" --sensors 3000 --avg-degree 7 --sigma 0.05 --seed 22 -q
-ARGS=(--max-iter 4000 --tol 0 -q)
-for alg in pipeline bb; do
-  mpi 2 "$SNL" solve "$T/net.h5" -o "$T/ref.$alg.h5" --algorithm $alg "${ARGS[@]}"
+"$SNL" generate -o "$T/small.h5" --sensors 400 --avg-degree 7 --sigma 0.05 --seed 23 -q
+for alg in async pipeline bb; do
+  ARGS=(--max-iter 4000 --tol 0 -q)
+  NET="$T/net.h5"
+  EVERY=200
+  if [ $alg = async ]; then ARGS=(--max-iter 300 --tol 0 -q); NET="$T/small.h5"; EVERY=10; fi
+  mpi 2 "$SNL" solve "$NET" -o "$T/ref.$alg.h5" --algorithm $alg "${ARGS[@]}"
   # Stop a run with SIGUSR1 after it has written some checkpoints.
   rm -f "$T/ck.h5"
   set +e
-  "$MPIEXEC" "$MPIEXEC_NUMPROC_FLAG" 2 --oversubscribe "$SNL" solve "$T/net.h5" -o "$T/stopped.h5" \
-    --algorithm $alg "${ARGS[@]}" --checkpoint "$T/ck.h5" --checkpoint-every 100 &
+  "$MPIEXEC" "$MPIEXEC_NUMPROC_FLAG" 2 --oversubscribe "$SNL" solve "$NET" -o "$T/stopped.h5" \
+    --algorithm $alg "${ARGS[@]}" --checkpoint "$T/ck.h5" --checkpoint-every $EVERY &
   pid=$!
   for _ in $(seq 100); do [ -f "$T/ck.h5" ] && break; sleep 0.05; done
   sleep 0.3
@@ -25,11 +29,12 @@ for alg in pipeline bb; do
   [ -f "$T/stopped.h5" ] && fail "$alg: a stopped run must not write the result"
   for np in 1 3; do
     cp "$T/ck.h5" "$T/ck$np.h5"
-    mpi $np "$SNL" solve "$T/net.h5" -o "$T/res.$alg.$np.h5" --algorithm $alg "${ARGS[@]}" \
-      --checkpoint "$T/ck$np.h5" --checkpoint-every 100 --restart "$T/ck$np.h5"
+    mpi $np "$SNL" solve "$NET" -o "$T/res.$alg.$np.h5" --algorithm $alg "${ARGS[@]}" \
+      --checkpoint "$T/ck$np.h5" --checkpoint-every 1000 --restart "$T/ck$np.h5"
     h5diff "$T/ref.$alg.h5" "$T/res.$alg.$np.h5" /positions || fail "$alg: restart on $np ranks differs"
   done
 done
+ARGS=(--max-iter 4000 --tol 0 -q)
 # Refusals: another network, other options, damaged files.
 expect_error() {  # expect_error PATTERN cmd...
   local pat=$1; shift
