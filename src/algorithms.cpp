@@ -70,6 +70,9 @@ class Relaxation final : public Algorithm {
   }
 
   const std::vector<double>& positions() const override { return x_; }
+  std::int64_t memory_bytes() const override {
+    return static_cast<std::int64_t>(sizeof(double) * (x_.capacity() + prev_.capacity() + w_.capacity() + g_.capacity()));
+  }
   double objective() override {
     prob_.graph().halo().exchange(x_.data(), prob_.dim());
     return evaluate_costs(prob_, x_.data()).relaxed;
@@ -150,6 +153,9 @@ class MM final : public Algorithm {
   }
 
   const std::vector<double>& positions() const override { return x_; }
+  std::int64_t memory_bytes() const override {
+    return static_cast<std::int64_t>(sizeof(double) * (x_.capacity() + xn_.capacity() + y_.capacity() + aw_.capacity()));
+  }
   double objective() override {
     prob_.graph().halo().exchange(x_.data(), prob_.dim());
     return prob_.dim() == 2 ? surrogate<2>() : surrogate<3>();
@@ -220,12 +226,12 @@ class MM final : public Algorithm {
         const bool forward = gv < gr.global_id(u);  // e = (v, u)
         const double* xi = forward ? xv : xu;
         const double* xj = forward ? xu : xv;
+        // Orientation is data dependent (half the edges): a sign, not a
+        // branch. a + (-1 * t) == a - t exactly, so results are unchanged.
+        const double sgn = forward ? 1.0 : -1.0;
         double dz[P];
         for (int c = 0; c < P; ++c) dz[c] = xi[c] - xj[c];
-        if (forward)
-          for (int c = 0; c < P; ++c) acc[c] += dz[c] - y[c];
-        else
-          for (int c = 0; c < P; ++c) acc[c] -= dz[c] - y[c];
+        for (int c = 0; c < P; ++c) acc[c] += sgn * (dz[c] - y[c]);
         for (int c = 0; c < P; ++c) y[c] = keep * y[c] + invL * dz[c];
         project_sphere<P>(gr.edge_value(e), y);
       }
@@ -391,6 +397,11 @@ class BB final : public Algorithm {
   }
 
   const std::vector<double>& positions() const override { return x_; }
+  std::int64_t memory_bytes() const override {
+    return static_cast<std::int64_t>(sizeof(double) * (x_.capacity() + x_old_.capacity() + g_.capacity() +
+                                                       g_old_.capacity() + c_.capacity() + cn_.capacity() +
+                                                       wt_.capacity() + self_.capacity()));
+  }
   double objective() override {
     prob_.graph().halo().exchange(x_.data(), prob_.dim());
     return evaluate_costs(prob_, x_.data()).ml;

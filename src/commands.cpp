@@ -1,5 +1,6 @@
 #include "snl/commands.hpp"
 
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -333,6 +334,18 @@ int run_solve(const SolveCommand& cmd, MPI_Comm comm) {
   const double t_write = MPI_Wtime();
 
   if (!cmd.json.empty()) {
+    // Performance report (docs/performance.md): peak RSS of every rank (the
+    // METIS graph on rank 0 included), halo volume, bytes of solver state.
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    long long loc[4] = {static_cast<long long>(ru.ru_maxrss) * 1024,  // Linux: KiB
+                        static_cast<long long>(prob->graph().halo().send_volume()),
+                        static_cast<long long>(prob->memory_bytes()), static_cast<long long>(prob->num_owned())},
+              tot[4], mx[4];
+    MPI_Allreduce(loc, tot, 4, MPI_LONG_LONG, MPI_SUM, comm);
+    MPI_Allreduce(loc, mx, 4, MPI_LONG_LONG, MPI_MAX, comm);
+    const double n_sens = static_cast<double>(prob->num_sensors());
+    const std::int64_t iters = s.iterations;
     JsonObject j;
     j.add("algorithm", cmd.solver.algorithm)
         .add("iterations", static_cast<std::int64_t>(s.iterations))
@@ -362,7 +375,21 @@ int run_solve(const SolveCommand& cmd, MPI_Comm comm) {
         .add("edge_cut", static_cast<std::int64_t>(rep.partition.edge_cut))
         .add("ghosts", static_cast<std::int64_t>(rep.partition.total_ghosts))
         .add("unlocalizable_sensors", static_cast<std::int64_t>(rep.unlocalizable))
-        .add("lipschitz", s.lipschitz);
+        .add("lipschitz", s.lipschitz)
+        .add("iterate_seconds", s.iterate_seconds)
+        .add("seconds_per_iteration", iters > 0 ? s.iterate_seconds / double(iters) : 0.0)
+        .add("iterate_wait_fraction", s.iterate_seconds > 0 ? s.iterate_wait_seconds / s.iterate_seconds : 0.0)
+        .add("peak_rss_bytes_total", static_cast<std::int64_t>(tot[0]))
+        .add("peak_rss_bytes_max", static_cast<std::int64_t>(mx[0]))
+        .add("max_owned", static_cast<std::int64_t>(mx[3]))
+        .add("max_ghosts", static_cast<std::int64_t>(rep.partition.max_ghosts))
+        .add("halo_nodes_sent_per_iteration", static_cast<std::int64_t>(tot[1]))
+        .add("halo_bytes_per_iteration", static_cast<std::int64_t>(tot[1]) * prob->dim() * std::int64_t(sizeof(double)))
+        .add("problem_bytes", static_cast<std::int64_t>(tot[2]))
+        .add("algorithm_state_bytes", static_cast<std::int64_t>(s.algorithm_state_bytes))
+        .add("state_bytes_per_sensor", (double(tot[2]) + double(s.algorithm_state_bytes)) / n_sens)
+        .add("local_order", default_local_ordering() == LocalOrdering::kRcm ? "rcm" : "gid");
+    for (const auto& ph : s.phase_iterate_seconds) j.add(ph.first + "_iterate_seconds", ph.second);
     if (s.errors.valid) {
       j.add("rmse", s.errors.rmse).add("mpe", s.errors.mpe);
       j.add("rmse_localizable", s.errors.rmse_localizable).add("mpe_localizable", s.errors.mpe_localizable);

@@ -203,6 +203,15 @@ LocalizationProblem::LocalizationProblem(MPI_Comm comm, const Network& slab, Par
   if (report) *report = rep;
 }
 
+std::int64_t LocalizationProblem::memory_bytes() const {
+  return graph_.memory_bytes() +
+         static_cast<std::int64_t>(anchors_.capacity() * sizeof(double) +
+                                   anchor_offsets_.capacity() * sizeof(std::int64_t) +
+                                   anchor_ids_.capacity() * sizeof(std::int32_t) +
+                                   anchor_ranges_.capacity() * sizeof(double) + truth_.capacity() * sizeof(double) +
+                                   flags_.capacity());
+}
+
 std::vector<double> LocalizationProblem::file_rows_to_owned(const std::vector<double>& rows, GlobalId row_offset,
                                                             int width) const {
   MPI_Comm comm = this->comm();

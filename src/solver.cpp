@@ -221,9 +221,16 @@ Summary Solver::solve(const std::vector<double>& x0, std::vector<double>* x_out)
   const bool checkpointing = !ckpt_.path.empty();
 
   bool stop_all = false;
+  double iter_time = 0, iter_wait = 0;
   for (std::size_t ph = first_phase; ph < phases.size() && !stop_all; ++ph) {
     std::unique_ptr<Algorithm> alg = make_algorithm(phases[ph], prob_, opt_);
     alg->start(x);
+    {
+      long long b = alg->memory_bytes(), all = 0;
+      MPI_Allreduce(&b, &all, 1, MPI_LONG_LONG, MPI_SUM, comm);
+      sum.algorithm_state_bytes = std::max<std::int64_t>(sum.algorithm_state_bytes, all);
+    }
+    double phase_time = 0;
     std::int64_t k = 0;
     if (restart_file && ph == first_phase) {
       alg->load(StateReader(*restart_file, prob_));
@@ -249,7 +256,11 @@ Summary Solver::solve(const std::vector<double>& x0, std::vector<double>* x_out)
     TerminationType term = TerminationType::kNoConvergence;
     std::string msg;
     while (k < opt_.max_iter) {
+      const double w0 = halo.wait_seconds(), ti = MPI_Wtime();
       alg->iterate();
+      const double dt = MPI_Wtime() - ti;
+      phase_time += dt;
+      iter_wait += halo.wait_seconds() - w0;
       ++k;
       ++total_it;
       messages += alg->messages_per_iteration();
@@ -328,6 +339,12 @@ Summary Solver::solve(const std::vector<double>& x0, std::vector<double>* x_out)
         break;
       }
     }
+    iter_time += phase_time;
+    {
+      double g = 0;
+      MPI_Allreduce(&phase_time, &g, 1, MPI_DOUBLE, MPI_MAX, comm);
+      sum.phase_iterate_seconds.emplace_back(alg->name(), g);
+    }
     if (term == TerminationType::kNoConvergence) msg = "reached --max-iter";
     const auto& xp = alg->positions();
     std::copy(xp.begin(), xp.begin() + std::size_t(prob_.num_owned()) * p, x.begin());
@@ -363,6 +380,10 @@ Summary Solver::solve(const std::vector<double>& x0, std::vector<double>* x_out)
   double wf = sum.wall_seconds > 0 ? halo.wait_seconds() / sum.wall_seconds : 0, wfm = 0;
   MPI_Allreduce(&wf, &wfm, 1, MPI_DOUBLE, MPI_MAX, comm);
   sum.comm_wait_fraction = wfm;
+  double it_loc[2] = {iter_time, iter_wait}, it_max[2];
+  MPI_Allreduce(it_loc, it_max, 2, MPI_DOUBLE, MPI_MAX, comm);
+  sum.iterate_seconds = it_max[0];
+  sum.iterate_wait_seconds = it_max[1];
   if (x_out) *x_out = x;
   return sum;
 }

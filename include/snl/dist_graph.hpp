@@ -38,6 +38,16 @@ std::vector<int> partition_graph(MPI_Comm comm, GlobalId n, const std::vector<Gl
 template <class T>
 std::vector<T> exchange_records(MPI_Comm comm, const std::vector<std::vector<T>>& out);
 
+/// Order of the owned nodes inside the interior and boundary groups.
+/// kRcm: reverse Cuthill-McKee on the owned subgraph, so that neighbours are
+/// close in memory (the generator numbers sensors in random spatial order, and
+/// global-id order makes every neighbour access a cache miss). kGlobalId: the
+/// old order, kept for measurement. Results do not depend on it: every node
+/// still sums its neighbours in global-id order.
+enum class LocalOrdering { kRcm, kGlobalId };
+/// kRcm unless the environment sets SNL_LOCAL_ORDER=gid (for benchmarks).
+LocalOrdering default_local_ordering();
+
 class DistGraph {
  public:
   DistGraph() = default;
@@ -46,7 +56,8 @@ class DistGraph {
   /// overall, any rank may hold any edge), with `width` doubles of data each
   /// in `edge_values`. `halo_width`: most doubles per node the halo carries.
   DistGraph(MPI_Comm comm, GlobalId n, const std::vector<int>& owner, const std::vector<GlobalId>& edges,
-            const std::vector<double>& edge_values, int width, int halo_width);
+            const std::vector<double>& edge_values, int width, int halo_width,
+            LocalOrdering ordering = default_local_ordering());
 
   MPI_Comm comm() const { return comm_; }
   GlobalId num_global() const { return n_global_; }
@@ -73,6 +84,9 @@ class DistGraph {
 
   HaloPlan& halo() { return halo_; }
   const HaloPlan& halo() const { return halo_; }
+
+  /// Bytes held by the graph's arrays (capacities), halo buffers included.
+  std::int64_t memory_bytes() const;
 
   /// Map of owned global id -> local id, by binary search over the owned
   /// nodes (kept sorted in owned_sorted_). Returns -1 if not owned.

@@ -48,6 +48,13 @@ class HaloPlan {
   std::int64_t messages_sent() const { return messages_sent_; }
   std::int64_t bytes_sent() const { return bytes_sent_; }
   double wait_seconds() const { return wait_seconds_; }
+  /// Bytes held by the plan's arrays (capacities).
+  std::int64_t memory_bytes() const {
+    return static_cast<std::int64_t>(send_ids_.capacity() * sizeof(LocalId) +
+                                     send_begin_.capacity() * sizeof(std::int64_t) +
+                                     (recv_offset_.capacity() + recv_count_.capacity()) * sizeof(LocalId) +
+                                     (send_buf_.capacity() + recv_buf_.capacity()) * sizeof(double));
+  }
   void reset_counters() { messages_sent_ = bytes_sent_ = 0; wait_seconds_ = 0; }
 
  private:

@@ -54,6 +54,9 @@ class LocalizationProblem {
   int max_degree() const { return delta_max_; }            ///< delta_max (global)
   int max_anchor_degree() const { return max_anchor_deg_; }  ///< max_i |A_i| (global)
 
+  /// Bytes held by this rank's problem arrays (capacities; graph included).
+  std::int64_t memory_bytes() const;
+
   /// Monte Carlo over noise: replaces every range by |true distance +
   /// sigma N(0,1)| (003 eq. 28), the noise keyed by (seed, pair) so that both
   /// ends of an edge and any number of ranks draw the same value. Needs truth.

@@ -8,6 +8,7 @@
 #include <limits>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "snl/checkpoint.hpp"
@@ -94,6 +95,13 @@ struct Summary {
   std::int64_t mpi_bytes = 0;        ///< halo bytes sent, all ranks (algorithm exchanges)
   double comm_wait_fraction = 0;     ///< time waiting in halo end() / wall (max over ranks)
   double wall_seconds = 0;
+  /// Time inside Algorithm::iterate() only (no history metrics, reductions or
+  /// checkpoints), max over ranks; and the halo wait within it, max over ranks.
+  double iterate_seconds = 0, iterate_wait_seconds = 0;
+  /// Per phase (pipeline: relaxation then mm), same meaning as iterate_seconds.
+  std::vector<std::pair<std::string, double>> phase_iterate_seconds;
+  /// Algorithm state (iterates, edge variables), all ranks; max over phases.
+  std::int64_t algorithm_state_bytes = 0;
   double lipschitz = NAN;
   int ranks = 1;
   std::vector<IterationSummary> history;
@@ -123,6 +131,8 @@ class Algorithm {
   virtual double reals_per_iteration() const = 0;
   /// Constant used by the method (NaN if none).
   virtual double lipschitz() const { return std::numeric_limits<double>::quiet_NaN(); }
+  /// Bytes of this rank's state arrays (capacities), for the memory report.
+  virtual std::int64_t memory_bytes() const { return 0; }
   /// Collective. Everything needed to continue bit for bit (after start()).
   virtual void save(StateWriter& w) const = 0;
   virtual void load(const StateReader& r) = 0;

@@ -1,0 +1,163 @@
+// Google Benchmark micro-benchmarks of the iteration kernels, through the
+// public API: the gradient of f_hat (003, Alg. 1), one MM iteration (000,
+// Alg. 1; halo and norms included), one relaxation iteration, and the halo
+// pack/exchange/unpack. Each kernel runs with the RCM local order and with the
+// global-id order (arg 1 = rcm, 0 = gid), to measure the locality effect.
+//
+//   build/bench/snl_micro [--benchmark_filter=...]          (1 rank)
+//   mpirun -np 2 build/bench/snl_micro --benchmark_filter=Halo (2 ranks)
+// SNL_MICRO_SENSORS sets n (default 1,000,000: well out of cache).
+// Iteration counts are fixed so that every rank runs the same collectives.
+#include <benchmark/benchmark.h>
+#include <mpi.h>
+
+#include <cstdlib>
+#include <map>
+#include <memory>
+
+#include "snl/generate.hpp"
+#include "snl/metrics.hpp"
+#include "snl/problem.hpp"
+#include "snl/solver.hpp"
+
+namespace {
+
+using namespace snl;
+
+GlobalId bench_sensors() {
+  const char* s = std::getenv("SNL_MICRO_SENSORS");
+  return s ? std::atoll(s) : 1000000;
+}
+
+// This rank's slab of a whole in-memory network, as read_network hands it out.
+Network slab_of(const Network& w, MPI_Comm comm) {
+  int size = 1, rank = 0;
+  MPI_Comm_size(comm, &size);
+  MPI_Comm_rank(comm, &rank);
+  Network s;
+  s.dim = w.dim;
+  s.num_sensors = w.num_sensors;
+  s.anchors = w.anchors;
+  s.sigma = w.sigma;
+  s.has_truth = w.has_truth;
+  const int p = w.dim;
+  GlobalId b, e;
+  block_range(w.local_sensor_edges(), size, rank, b, e);
+  s.sensor_edges.assign(w.sensor_edges.begin() + 2 * b, w.sensor_edges.begin() + 2 * e);
+  s.sensor_ranges.assign(w.sensor_ranges.begin() + b, w.sensor_ranges.begin() + e);
+  s.sensor_edge_offset = b;
+  block_range(w.local_anchor_edges(), size, rank, b, e);
+  s.anchor_edges.assign(w.anchor_edges.begin() + 2 * b, w.anchor_edges.begin() + 2 * e);
+  s.anchor_ranges.assign(w.anchor_ranges.begin() + b, w.anchor_ranges.begin() + e);
+  s.anchor_edge_offset = b;
+  block_range(w.num_sensors, size, rank, b, e);
+  if (w.has_truth) s.truth.assign(w.truth.begin() + b * p, w.truth.begin() + e * p);
+  s.sensor_row_offset = b;
+  s.total_sensor_edges = w.local_sensor_edges();
+  s.total_anchor_edges = w.local_anchor_edges();
+  return s;
+}
+
+// One problem per local ordering, built once (generation and setup take
+// seconds); cleared before MPI_Finalize (the halo plans hold MPI requests).
+std::map<bool, std::unique_ptr<LocalizationProblem>> g_problems;
+
+LocalizationProblem& problem(bool rcm) {
+  auto& slot = g_problems[rcm];
+  if (!slot) {
+    static Network whole = [] {
+      GenerateOptions opt;
+      opt.sensors = bench_sensors();
+      opt.avg_degree = 6;
+      opt.sigma = 0.01;
+      opt.localizable = GenerateOptions::Localizable::kNo;
+      return generate_network(opt);
+    }();
+    setenv("SNL_LOCAL_ORDER", rcm ? "rcm" : "gid", 1);
+    slot = std::make_unique<LocalizationProblem>(MPI_COMM_WORLD, slab_of(whole, MPI_COMM_WORLD),
+                                                 PartitionMethod::kMetis, nullptr);
+    unsetenv("SNL_LOCAL_ORDER");
+  }
+  return *slot;
+}
+
+std::vector<double> local_positions(LocalizationProblem& prob) {
+  auto x0 = random_initial_positions(prob, 1);
+  std::vector<double> x(std::size_t(prob.num_local()) * prob.dim(), 0.0);
+  std::copy(x0.begin(), x0.end(), x.begin());
+  prob.graph().halo().exchange(x.data(), prob.dim());
+  return x;
+}
+
+void report(benchmark::State& st, const LocalizationProblem& prob) {
+  const auto edges = static_cast<std::int64_t>(prob.graph().adjacency().size());
+  st.SetItemsProcessed(st.iterations() * edges);  // directed edge visits
+  st.counters["owned"] = prob.num_owned();
+  st.counters["s_per_edge"] =
+      benchmark::Counter(double(edges), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+
+void BM_RelaxedGradient(benchmark::State& st) {
+  auto& prob = problem(st.range(0) != 0);
+  auto x = local_positions(prob);
+  std::vector<double> g(std::size_t(prob.num_owned()) * prob.dim());
+  for (auto _ : st) {
+    relaxed_gradient(prob, x.data(), g.data(), 0, prob.num_owned());
+    benchmark::DoNotOptimize(g.data());
+  }
+  report(st, prob);
+}
+
+template <const char* kName>
+void BM_Iteration(benchmark::State& st) {
+  auto& prob = problem(st.range(0) != 0);
+  SolverOptions opt;
+  auto alg = make_algorithm(kName, prob, opt);
+  alg->start(random_initial_positions(prob, 1));
+  for (auto _ : st) alg->iterate();
+  report(st, prob);
+}
+constexpr char kMM[] = "mm";
+constexpr char kRelax[] = "relaxation";
+
+void BM_HaloExchange(benchmark::State& st) {
+  auto& prob = problem(st.range(0) != 0);
+  auto x = local_positions(prob);
+  auto& halo = prob.graph().halo();
+  for (auto _ : st) {
+    halo.exchange(x.data(), prob.dim());  // pack, send/recv, unpack
+    benchmark::DoNotOptimize(x.data());
+  }
+  st.counters["ghosts"] = prob.graph().num_ghosts();
+  st.counters["send_nodes"] = double(halo.send_volume());
+}
+
+BENCHMARK(BM_RelaxedGradient)->Arg(1)->Arg(0)->Iterations(30)->Unit(benchmark::kMillisecond);
+BENCHMARK_TEMPLATE(BM_Iteration, kRelax)->Arg(1)->Arg(0)->Iterations(30)->Unit(benchmark::kMillisecond);
+BENCHMARK_TEMPLATE(BM_Iteration, kMM)->Arg(1)->Arg(0)->Iterations(30)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_HaloExchange)->Arg(1)->Iterations(2000)->Unit(benchmark::kMicrosecond);
+
+class NullReporter : public benchmark::BenchmarkReporter {
+ public:
+  bool ReportContext(const Context&) override { return true; }
+  void ReportRuns(const std::vector<Run>&) override {}
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  MPI_Init(&argc, &argv);
+  int rank = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  benchmark::Initialize(&argc, argv);
+  if (rank == 0) {
+    benchmark::RunSpecifiedBenchmarks();
+  } else {
+    NullReporter null;
+    benchmark::RunSpecifiedBenchmarks(&null);
+  }
+  benchmark::Shutdown();
+  g_problems.clear();
+  MPI_Finalize();
+  return 0;
+}

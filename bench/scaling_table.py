@@ -1,0 +1,77 @@
+#!/usr/bin/env python3
+"""Prints the one table of bench/scaling.sh from its records (JSON lines).
+
+Bytes-per-iteration model (all ranks, p = 2, doubles 8 B, local ids 4 B,
+offsets 8 B; n sensors, g ghosts, D = 2E directed sensor edges, A anchor
+pairs), counting every array the iteration streams once per pass, writes as
+one transfer (like STREAM), and gathered neighbour rows once (RCM locality):
+  relaxation: w = x + beta (x - prev)          read x, prev, write w   48 n
+              grad f_hat: offsets 8n, anchor offsets 8n, adjacency 4D,
+                  ranges 8D, w rows 16(n+g), anchors 12A, write g 16n
+              x(k) = w - g/L                    read w, g, write prev   48 n
+              stopping norms (x(k)-x(k-1), |g|) read prev, x, g        48 n
+            = 192 n + 16 g + 12 D + 12 A
+  mm:         offsets 8n, anchor offsets 8n, global ids 8(n+g) (own and
+              neighbours', for the edge orientation), adjacency 4D, ranges 8D,
+              x rows 16(n+g), y read+write 32D, anchors (id 4, range 8, w
+              read+write 32) 44A, write x_new 16n, stopping norms 32n
+            = 88 n + 24 g + 44 D + 44 A
+bound = bytes / STREAM triad bandwidth of all cores (measured in the same run).
+"""
+import json
+import sys
+
+
+def model_bytes(d):
+    n, g = d["num_sensors"], d["ghosts"]
+    D, A = 2 * d["sensor_pairs"], d["anchor_pairs"]
+    if d["algorithm"] == "relaxation":
+        return 192 * n + 16 * g + 12 * D + 12 * A
+    if d["algorithm"] == "mm":
+        return 88 * n + 24 * g + 44 * D + 44 * A
+    return float("nan")
+
+
+def main(path):
+    recs = [json.loads(l) for l in open(path) if l.strip()]
+    stream = next(r for r in recs if r.get("stream"))
+    gens = {r["n"]: r for r in recs if r.get("gen")}
+    runs = [r for r in recs if "algorithm" in r]
+    bw = stream["gbs_all"] * 1e9
+    t1 = {(r["num_sensors"], r["algorithm"]): r["iterate_seconds"] for r in runs if r["ranks"] == 1}
+    t1w = {r["algorithm"]: r["iterate_seconds"] for r in runs if r["ranks"] == 1 and r["num_sensors"] == 1000000}
+    print(f"STREAM triad: {stream['gbs_1']:.2f} GB/s (1 rank), {stream['gbs_all']:.2f} GB/s "
+          f"({stream['nproc']} ranks; the bound below uses this)")
+    for n, g in sorted(gens.items()):
+        print(f"generate n={n}: {g['generate_seconds']:.2f} s + write {g['gen_write_seconds']:.2f} s, "
+              f"peak RSS {g['gen_rss_kib'] / 2**20:.2f} GiB (rank 0, serial)")
+    hdr = ["kind", "n", "ranks", "alg", "part", "read_s", "setup_s", "iter_s", "ms/iter", "model_MB",
+           "bound_ms", "ratio", "par_eff", "RSS_GiB", "ghosts", "halo_KB/it", "wait", "write_s", "B/sensor"]
+    rows = []
+    for r in sorted(runs, key=lambda r: (r["kind"], r["num_sensors"], r["algorithm"], r["ranks"])):
+        it = r["iterations"]
+        ms = 1e3 * r["iterate_seconds"] / it
+        mb = model_bytes(r)
+        bound_ms = 1e3 * mb / bw
+        if r["kind"] == "weak":
+            base = t1w.get(r["algorithm"])
+            eff = base / r["iterate_seconds"] if base else float("nan")
+        else:
+            base = t1.get((r["num_sensors"], r["algorithm"]))
+            eff = base / (r["ranks"] * r["iterate_seconds"]) if base else float("nan")
+        rows.append([r["kind"], r["num_sensors"], r["ranks"], r["algorithm"], r["partition"],
+                     f"{r['read_seconds']:.2f}", f"{r['setup_seconds']:.2f}", f"{r['iterate_seconds']:.1f}",
+                     f"{ms:.2f}", f"{mb / 1e6:.0f}", f"{bound_ms:.2f}", f"{ms / bound_ms:.2f}", f"{eff:.2f}",
+                     f"{r['peak_rss_bytes_total'] / 2**30:.2f}", r["ghosts"],
+                     f"{r['halo_bytes_per_iteration'] / 1e3:.1f}", f"{r['iterate_wait_fraction']:.3f}",
+                     f"{r['write_seconds']:.2f}", f"{r['state_bytes_per_sensor']:.0f}"])
+    w = [max(len(str(x)) for x in col) for col in zip(hdr, *rows)]
+    line = lambda cells: "| " + " | ".join(str(c).rjust(k) for c, k in zip(cells, w)) + " |"
+    print(line(hdr))
+    print("|" + "|".join("-" * (k + 2) for k in w) + "|")
+    for row in rows:
+        print(line(row))
+
+
+if __name__ == "__main__":
+    main(sys.argv[1])
