@@ -106,11 +106,19 @@ double ml_cost(const snl::Network& net, const std::vector<double>& x) {
   return f;
 }
 
-double rmse(const snl::Network& net, const std::vector<double>& x) {
+// RMSE over all sensors; with only_localizable, over sensors without a
+// localizability flag (as snl's rmse_localizable; NaN when no flags are stored).
+double rmse(const snl::Network& net, const std::vector<double>& x, bool only_localizable = false) {
   if (!net.has_truth) return std::nan("");
-  double s = 0;
-  for (std::size_t t = 0; t < x.size(); ++t) s += (x[t] - net.truth[t]) * (x[t] - net.truth[t]);
-  return std::sqrt(s / double(net.num_sensors));
+  if (only_localizable && net.localizability.size() != std::size_t(net.num_sensors)) return std::nan("");
+  const int p = net.dim;
+  double s = 0, cnt = 0;
+  for (snl::GlobalId i = 0; i < net.num_sensors; ++i) {
+    if (only_localizable && net.localizability[i]) continue;
+    for (int c = 0; c < p; ++c) s += (x[i * p + c] - net.truth[i * p + c]) * (x[i * p + c] - net.truth[i * p + c]);
+    cnt += 1;
+  }
+  return cnt > 0 ? std::sqrt(s / cnt) : std::nan("");
 }
 
 int run(int argc, char** argv) {
@@ -175,8 +183,14 @@ int run(int argc, char** argv) {
   const double t_solve = MPI_Wtime();
 
   const double f = ml_cost(net, x), e = rmse(net, x);
-  // LM iterations = accepted + rejected steps (each one sparse factorization).
-  const std::int64_t iters = sum.num_successful_steps + sum.num_unsuccessful_steps;
+  // LM iterations = accepted + rejected steps, each one sparse factorization
+  // (Ceres counts its iteration 0, the start, as a successful step).
+  std::int64_t iters = 0, accepted = 0;
+  for (const auto& it : sum.iterations)
+    if (it.iteration > 0) {
+      ++iters;
+      accepted += it.step_is_successful ? 1 : 0;
+    }
 
   snl::ResultFile r;
   r.algorithm = "ceres-lm";
@@ -206,21 +220,20 @@ int run(int argc, char** argv) {
   if (!quiet) std::printf("%s\n", sum.FullReport().c_str());
   std::printf(
       "ceres_ml: n=%lld p=%d, %zu sensor pairs, %zu anchor pairs (%lld+%lld duplicates merged)\n"
-      "  %s after %lld LM iterations (%d accepted, %d rejected), %s\n"
+      "  %s after %lld LM iterations (%lld accepted), %s\n"
       "  ML cost %.10g -> %.10g, RMSE %.6g\n"
       "  time: read %.3f s, setup %.3f s, solve %.3f s, write %.3f s, wall %.3f s\n",
       static_cast<long long>(n), p, net.sensor_ranges.size(), net.anchor_ranges.size(),
       static_cast<long long>(merged.merged_sensor_pairs), static_cast<long long>(merged.merged_anchor_pairs),
-      ceres::TerminationTypeToString(sum.termination_type), static_cast<long long>(iters), sum.num_successful_steps,
-      sum.num_unsuccessful_steps, sum.message.c_str(), sum.initial_cost, f, e, t_read - t0, t_setup - t_read,
+      ceres::TerminationTypeToString(sum.termination_type), static_cast<long long>(iters), static_cast<long long>(accepted),
+      sum.message.c_str(), sum.initial_cost, f, e, t_read - t0, t_setup - t_read,
       t_solve - t_setup, t_write - t_solve, t_write - t0);
 
   if (!json.empty()) {
     snl::JsonObject j;
     j.add("algorithm", "ceres-lm")
         .add("iterations", iters)
-        .add("accepted_steps", static_cast<std::int64_t>(sum.num_successful_steps))
-        .add("rejected_steps", static_cast<std::int64_t>(sum.num_unsuccessful_steps))
+        .add("accepted_steps", accepted)
         .add_bool("converged", r.converged)
         .add("termination", ceres::TerminationTypeToString(sum.termination_type))
         .add("message", sum.message)
@@ -238,7 +251,7 @@ int run(int argc, char** argv) {
         .add("num_sensors", static_cast<std::int64_t>(n))
         .add("sensor_pairs", static_cast<std::int64_t>(net.sensor_ranges.size()))
         .add("anchor_pairs", static_cast<std::int64_t>(net.anchor_ranges.size()));
-    if (net.has_truth) j.add("rmse", e);
+    if (net.has_truth) j.add("rmse", e).add("rmse_localizable", rmse(net, x, true));
     std::FILE* fp = std::fopen(json.c_str(), "w");
     if (!fp) throw snl::Error("cannot write " + json);
     const std::string s = j.str();
