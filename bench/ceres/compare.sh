@@ -7,6 +7,7 @@
 #   relaxation: --tol 1e-6 --max-iter $RELAX_ITER (300)
 #   MM:         --tol 1e-6 --max-iter $MM_ITER (300)
 #   Ceres LM:   function_tolerance 1e-6, --max-iter $CERES_ITER (50, Ceres' default)
+# TABLE_ONLY=1 prints the table of the runs already in WORKDIR.
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
 BUILD=${BUILD:-$ROOT/build}
@@ -31,6 +32,7 @@ TIME=()
 [ -x /usr/bin/time ] && TIME=(/usr/bin/time -f "%M")
 
 for n in "${SIZES[@]}"; do
+  [ -z "${TABLE_ONLY:-}" ] || break  # TABLE_ONLY=1: only print the table of existing runs
   d=$WORK/n$n
   mkdir -p "$d"
   net=$d/net.h5
@@ -38,11 +40,11 @@ for n in "${SIZES[@]}"; do
   [ -f "$net" ] || "$SNL" generate -o "$net" --sensors "$n" --avg-degree 6 --sigma 0.01 --seed "$SEED" \
     --anchors $((n / 100)) --localizable no -q
   if [ ! -f "$d/R0.h5" ]; then
-    "${MPIRUN[@]}" "$SNL" solve "$net" -o "$d/R0.h5" --algorithm relaxation --tol 1e-6 --max-iter "$RELAX_ITER" \
+    "${MPIRUN[@]}" "$SNL" solve "$net" -o "$d/R0.h5" --algorithm relaxation --tol 1e-6 --max-iter "$RELAX_ITER" --history-every 50 \
       --json "$d/R0.json" -q
   fi
   "${MPIRUN[@]}" "$SNL" solve "$net" -o "$d/mm.h5" --algorithm mm --init "$d/R0.h5" --tol 1e-6 \
-    --max-iter "$MM_ITER" --json "$d/mm.json" -q
+    --max-iter "$MM_ITER" --history-every 50 --json "$d/mm.json" -q
   "${TIME[@]}" "$CERES" "$net" "$d/R0.h5" -o "$d/ceres.h5" --json "$d/ceres.json" --max-iter "$CERES_ITER" \
     --tol 1e-6 --threads "$NP" -q > "$d/ceres.log" 2> "$d/ceres.err" || { cat "$d/ceres.err" >&2; exit 1; }
   tail -n 1 "$d/ceres.err" > "$d/ceres.rss_kb" || true
