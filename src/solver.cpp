@@ -238,8 +238,14 @@ Summary Solver::solve(const std::vector<double>& x0, std::vector<double>* x_out)
       restart_file.reset();
     }
     sum.lipschitz = alg->lipschitz();
-    const std::int64_t every =
-        opt_.history_every > 0 ? opt_.history_every : (opt_.max_iter <= 2000 ? 1 : (opt_.max_iter + 999) / 1000);
+    // Auto: every iteration for small runs; about 1000 records per phase for
+    // long ones; at least every 10 iterations on large networks, where a
+    // record (an extra exchange and two reductions) costs about an iteration.
+    std::int64_t every = opt_.history_every;
+    if (every <= 0) {
+      every = opt_.max_iter <= 2000 ? 1 : (opt_.max_iter + 999) / 1000;
+      if (prob_.num_sensors() > 100000) every = std::max<std::int64_t>(every, 10);
+    }
     double prev_obj = objective_of(*alg);
     if (k == 0) {
       sum.initial_cost = prev_obj;
