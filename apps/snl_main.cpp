@@ -151,10 +151,11 @@ int main(int argc, char** argv) {
   } catch (const snl::Error& err) {
     // snl::Error is raised identically on every rank: one message, clean exit.
     status = fail(comm, err.what(), 1);
-  } catch (const std::exception& err) {
+  } catch (const std::bad_alloc&) {
     // Anything else may be rank-local: never hang the others.
-    std::fprintf(stderr, "snl: internal error on rank %d: %s\n", snl::comm_rank(comm), err.what());
-    MPI_Abort(comm, 70);
+    snl::abort_all(comm, "out of memory");
+  } catch (const std::exception& err) {
+    snl::abort_all(comm, std::string("internal error: ") + err.what());
   }
   MPI_Finalize();
   return status;

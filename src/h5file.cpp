@@ -264,6 +264,8 @@ H5File::H5File(const std::string& path, MPI_Comm comm, Mode mode) : impl_(std::m
       err = "cannot write " + path + ": directory " + dir + " is not writable";
     else if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
       err = "cannot write " + path + ": it is a directory";
+    else if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode))
+      err = "cannot write " + path + ": it is not a regular file (it would be replaced)";
   }
   agree(comm, err);
   long long pid = m.rank == 0 ? static_cast<long long>(::getpid()) : 0;

@@ -242,7 +242,12 @@ Summary Solver::solve(const std::vector<double>& x0, std::vector<double>* x_out)
     TerminationType term = TerminationType::kNoConvergence;
     std::string msg;
     while (k < opt_.max_iter) {
-      alg->iterate();
+      // A rank-local failure (std::bad_alloc) while the others wait in the
+      // iteration's collectives cannot be agreed on: it aborts every rank.
+      abort_on_local_failure(comm, "iteration", [&] {
+        test_fail_point("solve", total_it + 1);  // fault-injection tests
+        alg->iterate();
+      });
       ++k;
       ++total_it;
       messages += alg->messages_per_iteration();
