@@ -4,6 +4,7 @@
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 
 #include "snl/commands.hpp"
@@ -156,10 +157,20 @@ int main(int argc, char** argv) {
   } catch (const snl::Error& err) {
     // snl::Error is raised identically on every rank: one message, clean exit.
     status = fail(comm, err.what(), 1);
-  } catch (const std::exception& err) {
+  } catch (const std::bad_alloc&) {
     // Anything else may be rank-local: never hang the others.
-    std::fprintf(stderr, "snl: internal error on rank %d: %s\n", snl::comm_rank(comm), err.what());
-    MPI_Abort(comm, 70);
+    snl::abort_all(comm, "out of memory");
+  } catch (const std::exception& err) {
+    snl::abort_all(comm, std::string("internal error: ") + err.what());
+  }
+  // After a failed H5Fclose (disk full) HDF5 would crash in its shutdown inside
+  // MPI_Finalize (snl::h5_close_failed): then every rank leaves without it, with
+  // the status already decided (the error was reported above).
+  int unclean = snl::h5_close_failed() ? 1 : 0, any_unclean = 0;
+  MPI_Allreduce(&unclean, &any_unclean, 1, MPI_INT, MPI_MAX, comm);
+  if (any_unclean) {
+    std::fflush(nullptr);
+    std::_Exit(status);
   }
   MPI_Finalize();
   return status;

@@ -1,6 +1,7 @@
 #include "snl/commands.hpp"
 
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -108,6 +109,9 @@ void check_output_path(const std::string& path, MPI_Comm comm) {
       err = path + ": directory '" + d + "' is not writable";
     else if (access(path.c_str(), F_OK) == 0 && access(path.c_str(), W_OK) != 0)
       err = path + ": file exists and is not writable";
+    else if (struct stat st {}; stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode))
+      err = path + (S_ISDIR(st.st_mode) ? ": is a directory"
+                                        : ": exists and is not a regular file (e.g. a device); refusing to replace it");
   }
   agree(comm, err);
 }

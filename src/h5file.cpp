@@ -118,6 +118,27 @@ std::string dir_of(const std::string& path) {
   return path.substr(0, slash);
 }
 
+/// Allocates the blocks of bytes [0, size) of `file`, so that HDF5's metadata
+/// flush at close, which writes inside the space it has already addressed,
+/// cannot fail with ENOSPC. Parallel HDF5 1.10 does not survive a flush that
+/// fails on one rank only (that rank leaves a barrier the others wait in), so
+/// a full disk must be seen here, before the close. Returns "" or the reason;
+/// a file system without fallocate is not reserved (and not protected).
+std::string reserve_space(const std::string& file, hid_t h5) {
+  hsize_t size = 0;
+  if (H5Fget_filesize(h5, &size) < 0) {
+    H5Eclear2(H5E_DEFAULT);
+    return "";
+  }
+  const int fd = ::open(file.c_str(), O_WRONLY);
+  if (fd < 0) return errno_text(errno);
+  int rc = 0;
+  if (size > 0 && ::fallocate(fd, 0, 0, static_cast<off_t>(size)) != 0) rc = errno;
+  ::close(fd);
+  if (rc == 0 || rc == EOPNOTSUPP || rc == ENOSYS || rc == EINVAL) return "";
+  return errno_text(rc);
+}
+
 template <class T>
 hid_t native_type() {
   if constexpr (std::is_same_v<T, double>) return H5T_NATIVE_DOUBLE;
@@ -135,6 +156,12 @@ hid_t file_type() {
 }  // namespace
 
 void h5_quiet() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
+
+namespace {
+bool g_close_failed = false;  // see h5_close_failed()
+}  // namespace
+
+bool h5_close_failed() { return g_close_failed; }
 
 // The state lives outside the class so that helpers in this file can use it.
 struct H5FileState {
@@ -209,8 +236,18 @@ struct H5FileState {
 
   ~H5FileState() {
     // Never throws: the destructor may run during unwinding on every rank.
+    if (mode == H5File::Mode::kCreate && !committed && file >= 0) {
+      // Discarding a file being written, after an error (agreed on every
+      // rank). Closing it would flush HDF5's metadata, and with a full disk
+      // parallel HDF5 1.10 fails that flush on some ranks only, which then
+      // leave a barrier the others wait in (a hang), or it crashes later in
+      // its shutdown. The file is left open instead (the temporary is removed
+      // below) and the process ends without HDF5's shutdown (h5_close_failed).
+      g_close_failed = true;
+      file = -1;
+    }
     if (file >= 0) {
-      H5Fclose(file);
+      if (H5Fclose(file) < 0) g_close_failed = true;
       file = -1;
     }
     if (mode == H5File::Mode::kCreate && !committed && rank == 0 && !tmp.empty()) std::remove(tmp.c_str());
@@ -264,6 +301,8 @@ H5File::H5File(const std::string& path, MPI_Comm comm, Mode mode) : impl_(std::m
       err = "cannot write " + path + ": directory " + dir + " is not writable";
     else if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
       err = "cannot write " + path + ": it is a directory";
+    else if (::stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode))
+      err = "cannot write " + path + ": it is not a regular file (it would be replaced)";
   }
   agree(comm, err);
   long long pid = m.rank == 0 ? static_cast<long long>(::getpid()) : 0;
@@ -732,7 +771,15 @@ void H5File::commit() {
   Impl& m = *impl_;
   std::string err;
   if (m.file < 0) throw Error(m.path + ": file already closed");
-  if (H5Fclose(m.file) < 0) err = "cannot write " + m.path + " (closing failed: " + h5_detail() + ")";
+  if (m.mode == Mode::kCreate && m.rank == 0) {
+    const std::string why = reserve_space(m.tmp, m.file);
+    if (!why.empty()) err = "cannot write " + m.path + " (" + why + ")";
+  }
+  agree(m.comm, err);  // on error the destructor discards the file
+  if (H5Fclose(m.file) < 0) {
+    g_close_failed = true;
+    err = "cannot write " + m.path + " (closing failed: " + h5_detail() + ")";
+  }
   m.file = -1;
   agree(m.comm, err);
   if (m.mode != Mode::kCreate) return;

@@ -2,7 +2,10 @@
 
 #include <algorithm>
 #include <climits>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
+#include <stdexcept>
 
 namespace snl {
 
@@ -94,6 +97,43 @@ void agree_first(MPI_Comm comm, std::int64_t key, const std::string& local_error
 
 void agree(MPI_Comm comm, const std::string& local_error) {
   agree_first(comm, comm_rank(comm), local_error);
+}
+
+void abort_all(MPI_Comm comm, const std::string& what) {
+  std::fprintf(stderr, "snl: error: rank %d: %s; aborting all ranks\n", comm_rank(comm), what.c_str());
+  std::fflush(stderr);
+  MPI_Abort(comm, 70);
+  std::abort();  // MPI_Abort does not return; keep [[noreturn]] honest
+}
+
+void test_fail_point(const char* point, long long iteration) {
+  struct Spec {
+    std::string point;
+    int rank = -1;
+    long long iteration = -1;
+  };
+  static const Spec spec = [] {
+    Spec s;
+    const char* env = std::getenv("SNL_TEST_FAIL");
+    if (!env || !*env) return s;
+    const std::string v = env;
+    const auto c1 = v.find(':');
+    if (c1 == std::string::npos) return s;
+    const auto c2 = v.find(':', c1 + 1);
+    s.point = v.substr(0, c1);
+    s.rank = std::atoi(v.substr(c1 + 1, c2 == std::string::npos ? std::string::npos : c2 - c1 - 1).c_str());
+    if (c2 != std::string::npos) s.iteration = std::atoll(v.substr(c2 + 1).c_str());
+    return s;
+  }();
+  if (spec.rank < 0 || spec.point != point) return;
+  if (spec.iteration >= 0 && spec.iteration != iteration) return;
+  int world = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &world);
+  if (world != spec.rank) return;
+  if (spec.point == "alloc") throw std::bad_alloc();
+  throw std::runtime_error("injected failure at '" + spec.point + "' on rank " + std::to_string(world) +
+                           (spec.iteration >= 0 ? " iteration " + std::to_string(spec.iteration) : std::string()) +
+                           " (SNL_TEST_FAIL)");
 }
 
 }  // namespace snl

@@ -121,7 +121,10 @@ Network read_network(const std::string& path, MPI_Comm comm) {
   // Each rank checks its slab; the globally first violation wins on all ranks.
   NetworkIssue issue;
   try {
+    test_fail_point("read");  // fault-injection tests: a failure on one rank's slab
     issue = check_network(net, false);
+  } catch (const std::bad_alloc&) {
+    issue = {0, "out of memory while checking the network"};
   } catch (const std::exception& ex) {
     issue = {0, ex.what()};
   }

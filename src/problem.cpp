@@ -44,9 +44,17 @@ int slab_holder(const std::vector<GlobalId>& starts, GlobalId g) {
 
 }  // namespace
 
+// The body runs collectives from start to end: a failure that only some ranks
+// see (std::bad_alloc, a bug) cannot be agreed on without a hang, so it aborts
+// every rank (abort_on_local_failure); snl::Error is agreed and propagates.
 LocalizationProblem::LocalizationProblem(MPI_Comm comm, const Network& slab, PartitionMethod method,
                                          ProblemReport* report)
     : dim_(slab.dim), anchors_(slab.anchors), has_truth_(slab.has_truth), sigma_(slab.sigma) {
+  abort_on_local_failure(comm, "problem setup", [&] { build(comm, slab, method, report); });
+}
+
+void LocalizationProblem::build(MPI_Comm comm, const Network& slab, PartitionMethod method, ProblemReport* report) {
+  test_fail_point("setup");  // fault-injection tests: one rank fails before the first collective
   const int size = comm_size(comm);
   const GlobalId n = slab.num_sensors;
   const int p = dim_;
@@ -64,6 +72,7 @@ LocalizationProblem::LocalizationProblem(MPI_Comm comm, const Network& slab, Par
       out[block_owner(n, size, a)].push_back({a, b, slab.sensor_ranges[e]});
     }
     auto got = exchange_records(comm, out);
+    test_fail_point("alloc");  // fault-injection tests: one rank runs out of memory between collectives
     sedges.reserve(2 * got.size());
     sranges.reserve(got.size());
     for (const auto& r : got) {

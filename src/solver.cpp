@@ -263,7 +263,12 @@ Summary Solver::solve(const std::vector<double>& x0, std::vector<double>* x_out)
     std::string msg;
     while (k < opt_.max_iter) {
       const double w0 = halo.wait_seconds(), ti = MPI_Wtime();
-      alg->iterate();
+      // A rank-local failure (std::bad_alloc) while the others wait in the
+      // iteration's collectives cannot be agreed on: it aborts every rank.
+      abort_on_local_failure(comm, "iteration", [&] {
+        test_fail_point("solve", total_it + 1);  // fault-injection tests
+        alg->iterate();
+      });
       const double dt = MPI_Wtime() - ti;
       phase_time += dt;
       iter_wait += halo.wait_seconds() - w0;

@@ -175,7 +175,13 @@ GlobalId merge_rows(std::vector<GlobalId>& edges, std::vector<double>& ranges) {
     while (f < E && rows[f].a == rows[e].a && rows[f].b == rows[e].b) sum += rows[f++].r;
     edges[2 * out] = rows[e].a;
     edges[2 * out + 1] = rows[e].b;
-    ranges[out] = f - e == 1 ? rows[e].r : sum / static_cast<double>(f - e);
+    double avg = sum / static_cast<double>(f - e);
+    if (!std::isfinite(avg)) {  // the sum of huge ranges overflowed: average scaled terms
+      avg = 0.0;
+      for (std::size_t t = e; t < f; ++t) avg += rows[t].r / static_cast<double>(f - e);
+    }
+    // Rounding must not take the mean outside [min, max] (rows are ascending).
+    ranges[out] = f - e == 1 ? rows[e].r : std::min(std::max(avg, rows[e].r), rows[f - 1].r);
     ++out;
     e = f;
   }

@@ -21,7 +21,8 @@ class H5File {
   /// kRead opens an existing file read-only. kCreate creates a temporary file
   /// next to `path` (same directory); commit() renames it over `path`. A file
   /// that is destroyed without commit() removes its temporary file, so an
-  /// existing `path` is never clobbered by a failed write.
+  /// existing `path` is never clobbered by a failed write (the HDF5 file is
+  /// then left open: see h5_close_failed).
   H5File(const std::string& path, MPI_Comm comm, Mode mode);
   ~H5File();
   H5File(const H5File&) = delete;
@@ -86,5 +87,13 @@ class H5File {
 
 /// Silences HDF5's automatic error stack printing (we report our own errors).
 void h5_quiet();
+
+/// True once a file on this process failed to close or was discarded after a
+/// write error (left open: closing it would flush HDF5's metadata, which with a
+/// full disk parallel HDF5 1.10 fails on some ranks only, a hang; and a failed
+/// close leaves an id over a freed object that crashes HDF5's own shutdown in
+/// MPI_Finalize or at exit, HDF5 CVE-2020-10812, fixed in 1.14.1). Such a
+/// process must end without shutting HDF5 down (apps/snl_main.cpp: _Exit).
+bool h5_close_failed();
 
 }  // namespace snl

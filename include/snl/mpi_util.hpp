@@ -4,6 +4,7 @@
 #include <mpi.h>
 
 #include <cstdint>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,34 @@ void collective_try(MPI_Comm comm, F&& f) {
   }
   agree(comm, err);
 }
+
+/// Prints "snl: error: rank R: <what>; aborting all ranks" on stderr and calls
+/// MPI_Abort (status 70). For failures that only some ranks see inside code
+/// that runs collectives, where agreeing on the error would itself hang.
+[[noreturn]] void abort_all(MPI_Comm comm, const std::string& what);
+
+/// Runs f(), code with collectives inside. snl::Error is raised identically on
+/// every rank (agreed), so it propagates; any other exception (std::bad_alloc,
+/// a bug) is rank-local and cannot be agreed on without a hang: abort_all().
+template <class F>
+void abort_on_local_failure(MPI_Comm comm, const char* stage, F&& f) {
+  try {
+    f();
+  } catch (const Error&) {
+    throw;
+  } catch (const std::bad_alloc&) {
+    abort_all(comm, std::string("out of memory during ") + stage);
+  } catch (const std::exception& e) {
+    abort_all(comm, std::string(e.what()) + " (during " + stage + ")");
+  }
+}
+
+/// Fault-injection hook for tests. With SNL_TEST_FAIL=<point>:<rank>[:<iter>]
+/// in the environment, the process of that MPI_COMM_WORLD rank throws when it
+/// reaches test_fail_point(point) (and, if <iter> is given, iteration == iter):
+/// std::bad_alloc for the point "alloc", std::runtime_error otherwise. A no-op
+/// (one getenv at the first call) when the variable is unset.
+void test_fail_point(const char* point, long long iteration = -1);
 
 /// Broadcast a string from root.
 std::string bcast_string(MPI_Comm comm, const std::string& s, int root = 0);

@@ -70,6 +70,7 @@ class LocalizationProblem {
   std::vector<double> owned_to_file_rows(const double* owned, int width, GlobalId* row_offset) const;
 
  private:
+  void build(MPI_Comm comm, const Network& slab, PartitionMethod method, ProblemReport* report);
   int dim_ = 2;
   DistGraph graph_;
   std::vector<double> anchors_;
