@@ -10,17 +10,19 @@ source "$(dirname "$0")/common.bash"
 for alg in async pipeline bb; do
   ARGS=(--max-iter 4000 --tol 0 -q)
   NET="$T/net.h5"
-  EVERY=200
+  EVERY=100
   if [ $alg = async ]; then ARGS=(--max-iter 300 --tol 0 -q); NET="$T/small.h5"; EVERY=10; fi
   mpi 2 "$SNL" solve "$NET" -o "$T/ref.$alg.h5" --algorithm $alg "${ARGS[@]}"
   # Stop a run with SIGUSR1 after it has written some checkpoints.
   rm -f "$T/ck.h5"
   set +e
-  "$MPIEXEC" "$MPIEXEC_NUMPROC_FLAG" 2 --oversubscribe "$SNL" solve "$NET" -o "$T/stopped.h5" \
+  # Slow checkpoint writes (test hook) keep the run alive until the signal lands.
+  SNL_TEST_CHECKPOINT_DELAY=0.1 \
+  "$MPIEXEC" "$MPIEXEC_NUMPROC_FLAG" 2 --oversubscribe -x SNL_TEST_CHECKPOINT_DELAY "$SNL" solve "$NET" -o "$T/stopped.h5" \
     --algorithm $alg "${ARGS[@]}" --checkpoint "$T/ck.h5" --checkpoint-every $EVERY &
   pid=$!
-  for _ in $(seq 100); do [ -f "$T/ck.h5" ] && break; sleep 0.05; done
-  sleep 0.3
+  for _ in $(seq 400); do [ -f "$T/ck.h5" ] && break; sleep 0.05; done
+  sleep 0.2
   kill -USR1 $pid
   wait $pid
   rc=$?
