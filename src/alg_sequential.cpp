@@ -22,16 +22,14 @@
 #include "snl/metrics.hpp"
 #include "snl/random.hpp"
 #include "snl/solver.hpp"
+#include "algorithm_util.hpp"
 
 namespace snl {
 
 namespace {
 
-std::vector<double> with_ghosts(const LocalizationProblem& prob, const std::vector<double>& x) {
-  std::vector<double> out(std::size_t(prob.num_local()) * prob.dim(), 0.0);
-  std::copy(x.begin(), x.begin() + std::size_t(prob.num_owned()) * prob.dim(), out.begin());
-  return out;
-}
+using detail::diff_norms;
+const auto with_ghosts = detail::with_ghost_rows;
 
 // Projection of z onto the ball B(c, rho), accumulated into acc.
 inline void add_ball_projection(const double* z, const double* c, double rho, int p, double* acc) {
@@ -155,13 +153,7 @@ class ProjectionMethod final : public Algorithm {
       }
       g.halo().exchange(x_.data(), p);  // the next colour sees this one's values
     }
-    double d = 0, s = 0;
-    for (std::size_t t = 0; t < prev_.size(); ++t) {
-      d += (x_[t] - prev_[t]) * (x_[t] - prev_[t]);
-      s += x_[t] * x_[t];
-    }
-    diff_sq_ = d;
-    x_sq_ = s;
+    diff_norms(prob_, x_.data(), prev_.data(), &diff_sq_, &x_sq_);
   }
 
   const std::vector<double>& positions() const override { return x_; }
@@ -247,13 +239,7 @@ class Async final : public Algorithm {
       window_ = std::max<std::int64_t>(64, 2 * (end - start));
       k_ = end;
     }
-    double d = 0, s = 0;
-    for (std::size_t t = 0; t < prev_.size(); ++t) {
-      d += (x_[t] - prev_[t]) * (x_[t] - prev_[t]);
-      s += x_[t] * x_[t];
-    }
-    diff_sq_ = d;
-    x_sq_ = s;
+    diff_norms(prob_, x_.data(), prev_.data(), &diff_sq_, &x_sq_);
   }
 
   const std::vector<double>& positions() const override { return x_; }

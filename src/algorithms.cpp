@@ -9,28 +9,14 @@
 #include "snl/metrics.hpp"
 #include "snl/random.hpp"
 #include "snl/solver.hpp"
+#include "algorithm_util.hpp"
 
 namespace snl {
 
 namespace {
 
-std::vector<double> with_ghost_rows(const LocalizationProblem& prob, const std::vector<double>& x) {
-  std::vector<double> out(std::size_t(prob.num_local()) * prob.dim(), 0.0);
-  std::copy(x.begin(), x.begin() + std::size_t(prob.num_owned()) * prob.dim(), out.begin());
-  return out;
-}
-
-void diff_norms(const LocalizationProblem& prob, const double* now, const double* before, double* d, double* s) {
-  const std::size_t m = std::size_t(prob.num_owned()) * prob.dim();
-  double dd = 0, ss = 0;
-  for (std::size_t t = 0; t < m; ++t) {
-    const double q = now[t] - before[t];
-    dd += q * q;
-    ss += now[t] * now[t];
-  }
-  *d = dd;
-  *s = ss;
-}
+using detail::diff_norms;
+using detail::with_ghost_rows;
 
 // ---------------------------------------------------------------------------
 // Disk relaxation, Nesterov's method (003, Algorithm 1):
