@@ -29,35 +29,6 @@ GlobalId bench_sensors() {
   return s ? std::atoll(s) : 1000000;
 }
 
-// This rank's slab of a whole in-memory network, as read_network hands it out.
-Network slab_of(const Network& w, MPI_Comm comm) {
-  int size = 1, rank = 0;
-  MPI_Comm_size(comm, &size);
-  MPI_Comm_rank(comm, &rank);
-  Network s;
-  s.dim = w.dim;
-  s.num_sensors = w.num_sensors;
-  s.anchors = w.anchors;
-  s.sigma = w.sigma;
-  s.has_truth = w.has_truth;
-  const int p = w.dim;
-  GlobalId b, e;
-  block_range(w.local_sensor_edges(), size, rank, b, e);
-  s.sensor_edges.assign(w.sensor_edges.begin() + 2 * b, w.sensor_edges.begin() + 2 * e);
-  s.sensor_ranges.assign(w.sensor_ranges.begin() + b, w.sensor_ranges.begin() + e);
-  s.sensor_edge_offset = b;
-  block_range(w.local_anchor_edges(), size, rank, b, e);
-  s.anchor_edges.assign(w.anchor_edges.begin() + 2 * b, w.anchor_edges.begin() + 2 * e);
-  s.anchor_ranges.assign(w.anchor_ranges.begin() + b, w.anchor_ranges.begin() + e);
-  s.anchor_edge_offset = b;
-  block_range(w.num_sensors, size, rank, b, e);
-  if (w.has_truth) s.truth.assign(w.truth.begin() + b * p, w.truth.begin() + e * p);
-  s.sensor_row_offset = b;
-  s.total_sensor_edges = w.local_sensor_edges();
-  s.total_anchor_edges = w.local_anchor_edges();
-  return s;
-}
-
 // One problem per local ordering, built once (generation and setup take
 // seconds); cleared before MPI_Finalize (the halo plans hold MPI requests).
 std::map<bool, std::unique_ptr<LocalizationProblem>> g_problems;
@@ -74,7 +45,7 @@ LocalizationProblem& problem(bool rcm) {
       return generate_network(opt);
     }();
     setenv("SNL_LOCAL_ORDER", rcm ? "rcm" : "gid", 1);
-    slot = std::make_unique<LocalizationProblem>(MPI_COMM_WORLD, slab_of(whole, MPI_COMM_WORLD),
+    slot = std::make_unique<LocalizationProblem>(MPI_COMM_WORLD, network_slab(whole, MPI_COMM_WORLD),
                                                  PartitionMethod::kMetis, nullptr);
     unsetenv("SNL_LOCAL_ORDER");
   }

@@ -67,33 +67,7 @@ inline Network make_network(const NetSpec& s) {
 }
 
 /// This rank's slab of a whole network, as read_network hands it out.
-inline Network slab_of(const Network& w, MPI_Comm comm) {
-  int size = 1, rank = 0;
-  MPI_Comm_size(comm, &size);
-  MPI_Comm_rank(comm, &rank);
-  Network s;
-  s.dim = w.dim;
-  s.num_sensors = w.num_sensors;
-  s.anchors = w.anchors;
-  s.sigma = w.sigma;
-  s.has_truth = w.has_truth;
-  const int p = w.dim;
-  GlobalId b, e;
-  block_range(w.local_sensor_edges(), size, rank, b, e);
-  s.sensor_edges.assign(w.sensor_edges.begin() + 2 * b, w.sensor_edges.begin() + 2 * e);
-  s.sensor_ranges.assign(w.sensor_ranges.begin() + b, w.sensor_ranges.begin() + e);
-  s.sensor_edge_offset = b;
-  block_range(w.local_anchor_edges(), size, rank, b, e);
-  s.anchor_edges.assign(w.anchor_edges.begin() + 2 * b, w.anchor_edges.begin() + 2 * e);
-  s.anchor_ranges.assign(w.anchor_ranges.begin() + b, w.anchor_ranges.begin() + e);
-  s.anchor_edge_offset = b;
-  block_range(w.num_sensors, size, rank, b, e);
-  if (w.has_truth) s.truth.assign(w.truth.begin() + b * p, w.truth.begin() + e * p);
-  s.sensor_row_offset = b;
-  s.total_sensor_edges = w.local_sensor_edges();
-  s.total_anchor_edges = w.local_anchor_edges();
-  return s;
-}
+inline Network slab_of(const Network& w, MPI_Comm comm) { return network_slab(w, comm); }
 
 /// Owned rows (local order) -> the whole [n, p] array in global order, on every rank.
 inline std::vector<double> allgather_positions(const LocalizationProblem& prob, const std::vector<double>& owned) {

@@ -101,6 +101,10 @@ struct NetworkHeader {
 /// MPI_COMM_SELF this reads the whole network.
 Network read_network(const std::string& path, MPI_Comm comm);
 
+/// This rank's slab of a whole network held in memory: the same rows and
+/// bookkeeping read_network would hand this rank for the same data.
+Network network_slab(const Network& whole, MPI_Comm comm);
+
 /// Whole network on the calling process (read_network on MPI_COMM_SELF).
 Network read_network_serial(const std::string& path);
 
