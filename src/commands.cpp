@@ -69,12 +69,6 @@ class ProgressPrinter : public IterationCallback {
   double phase_start_ = 0, last_ = -1e300;
 };
 
-int phase_code(const std::string& p) {
-  const char* names[] = {"relaxation", "mm", "bb", "pm", "async", "async-exact"};
-  for (int c = 0; c < 6; ++c)
-    if (p == names[c]) return c;
-  return 9;
-}
 
 }  // namespace
 
@@ -302,7 +296,7 @@ int run_solve(const SolveCommand& cmd, MPI_Comm comm) {
   };
   series("iteration", [](const IterationSummary& h) { return double(h.total_iteration); });
   series("phase_iteration", [](const IterationSummary& h) { return double(h.iteration); });
-  series("phase", [](const IterationSummary& h) { return double(phase_code(h.phase)); });
+  series("phase", [](const IterationSummary& h) { return double(algorithm_code(h.phase)); });
   series("cost", [](const IterationSummary& h) { return h.cost; });
   series("ml_cost", [](const IterationSummary& h) { return h.ml_cost; });
   series("communications", [](const IterationSummary& h) { return h.messages; });
@@ -318,7 +312,7 @@ int run_solve(const SolveCommand& cmd, MPI_Comm comm) {
                     {"message", s.message},
                     {"network", cmd.network},
                     {"partition", rep.partition.method},
-                    {"history_phase_codes", "0=relaxation 1=mm 2=bb 3=pm 4=async 5=async-exact"}};
+                    {"history_phase_codes", kAlgorithmCodes}};
   r.double_attrs = {{"ml_cost", s.costs.ml},
                     {"relaxed_cost", s.costs.relaxed},
                     {"gap_certificate", s.gap_certificate},

@@ -174,7 +174,7 @@ void run_experiment(const ExperimentCommand& cmd, MPI_Comm comm) {
     H5File f(cmd.h5, comm, H5File::Mode::kCreate);
     f.set_attr("format", std::string("snl-experiment"));
     f.set_attr("network", cmd.network);
-    f.set_attr("algorithms", std::string("0=relaxation 1=mm 2=bb 3=pm 4=async 5=async-exact"));
+    f.set_attr("algorithms", std::string(kAlgorithmCodes));
     auto col = [&](const char* name, auto get) {
       std::vector<double> v;
       for (const auto& r : rows) v.push_back(get(r));
@@ -182,12 +182,7 @@ void run_experiment(const ExperimentCommand& cmd, MPI_Comm comm) {
     };
     col("sigma", [](const Row& r) { return r.sigma; });
     col("trial", [](const Row& r) { return double(r.trial); });
-    col("algorithm", [](const Row& r) {
-      const char* names[] = {"relaxation", "mm", "bb", "pm", "async", "async-exact"};
-      for (int c = 0; c < 6; ++c)
-        if (r.algorithm == names[c]) return double(c);
-      return 9.0;
-    });
+    col("algorithm", [](const Row& r) { return double(algorithm_code(r.algorithm)); });
     col("iterations", [](const Row& r) { return double(r.iterations); });
     col("reals_per_sensor", [](const Row& r) { return r.reals; });
     col("ml_cost_start", [](const Row& r) { return r.ml_start; });

@@ -338,20 +338,26 @@ bool H5File::has_attr(const std::string& name) const {
   return found;
 }
 
+// Before writing attribute obj/leaf: create the object's groups if missing and
+// drop an existing attribute of that name (attributes cannot change type).
+static void prepare_attr(const H5FileState& m, const std::string& obj, const std::string& leaf) {
+  if (!link_exists(m.file, obj)) {
+    Hid lcpl(H5Pcreate(H5P_LINK_CREATE));
+    H5Pset_create_intermediate_group(lcpl, 1);
+    Hid g(H5Gcreate2(m.file, obj.c_str(), lcpl, H5P_DEFAULT, H5P_DEFAULT));
+    if (!g.ok()) throw Error(m.where("cannot create group '" + obj + "' (" + h5_detail() + ")"));
+  }
+  if (H5Aexists_by_name(m.file, obj.c_str(), leaf.c_str(), H5P_DEFAULT) > 0)
+    H5Adelete_by_name(m.file, obj.c_str(), leaf.c_str(), H5P_DEFAULT);
+}
+
 void H5File::set_attr(const std::string& name, const std::string& value) {
   collective_try(impl_->comm, [&] {
     const Impl& m = *impl_;
     m.need_write();
     std::string obj, leaf;
     split_name(name, obj, leaf);
-    if (!link_exists(m.file, obj)) {
-      Hid lcpl(H5Pcreate(H5P_LINK_CREATE));
-      H5Pset_create_intermediate_group(lcpl, 1);
-      Hid g(H5Gcreate2(m.file, obj.c_str(), lcpl, H5P_DEFAULT, H5P_DEFAULT));
-      if (!g.ok()) throw Error(m.where("cannot create group '" + obj + "' (" + h5_detail() + ")"));
-    }
-    if (H5Aexists_by_name(m.file, obj.c_str(), leaf.c_str(), H5P_DEFAULT) > 0)
-      H5Adelete_by_name(m.file, obj.c_str(), leaf.c_str(), H5P_DEFAULT);
+    prepare_attr(m, obj, leaf);
     // Variable-length UTF-8: what h5py writes, and it reads back as str.
     Hid t(H5Tcopy(H5T_C_S1));
     H5Tset_size(t, H5T_VARIABLE);
@@ -391,14 +397,7 @@ void set_number_attr(const H5FileState& m, const std::string& name, T value) {
   m.need_write();
   std::string obj, leaf;
   split_name(name, obj, leaf);
-  if (!link_exists(m.file, obj)) {
-    Hid lcpl(H5Pcreate(H5P_LINK_CREATE));
-    H5Pset_create_intermediate_group(lcpl, 1);
-    Hid g(H5Gcreate2(m.file, obj.c_str(), lcpl, H5P_DEFAULT, H5P_DEFAULT));
-    if (!g.ok()) throw Error(m.where("cannot create group '" + obj + "' (" + h5_detail() + ")"));
-  }
-  if (H5Aexists_by_name(m.file, obj.c_str(), leaf.c_str(), H5P_DEFAULT) > 0)
-    H5Adelete_by_name(m.file, obj.c_str(), leaf.c_str(), H5P_DEFAULT);
+  prepare_attr(m, obj, leaf);
   Hid space(H5Screate(H5S_SCALAR));
   Hid a(H5Acreate_by_name(m.file, obj.c_str(), leaf.c_str(), file_type<T>(), space, H5P_DEFAULT, H5P_DEFAULT,
                           H5P_DEFAULT));

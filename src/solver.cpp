@@ -23,6 +23,18 @@ const char* to_string(TerminationType t) {
   return "?";
 }
 
+namespace {
+const char* const kAlgorithmNames[] = {"relaxation", "mm", "bb", "pm", "async", "async-exact"};
+}  // namespace
+
+int algorithm_code(const std::string& name) {
+  for (int c = 0; c < 6; ++c)
+    if (name == kAlgorithmNames[c]) return c;
+  return 9;
+}
+
+const char* algorithm_name(int code) { return code >= 0 && code < 6 ? kAlgorithmNames[code] : "?"; }
+
 std::string SolverOptions::validate() const {
   static const char* known[] = {"relaxation", "mm", "pipeline", "bb", "pm", "async", "async-exact"};
   if (std::find_if(std::begin(known), std::end(known), [&](const char* k) { return algorithm == k; }) ==
@@ -58,13 +70,7 @@ Solver::Solver(LocalizationProblem& prob, SolverOptions opt) : prob_(prob), opt_
 
 namespace {
 
-const char* kPhaseNames[] = {"relaxation", "mm", "bb", "pm", "async", "async-exact"};
-int phase_code(const std::string& p) {
-  for (int c = 0; c < 6; ++c)
-    if (p == kPhaseNames[c]) return c;
-  return 9;
-}
-const char* phase_name(int c) { return c >= 0 && c < 6 ? kPhaseNames[c] : "?"; }
+
 
 // History as columns (checkpoints) and back.
 const char* kHistoryColumns[] = {"phase",     "iteration", "total_iteration", "cost",  "ml_cost", "rel_change",
@@ -74,7 +80,7 @@ std::vector<double> history_column(const std::vector<IterationSummary>& h, int c
   std::vector<double> v;
   v.reserve(h.size());
   for (const auto& it : h) {
-    const double vals[] = {double(phase_code(it.phase)), double(it.iteration), double(it.total_iteration), it.cost,
+    const double vals[] = {double(algorithm_code(it.phase)), double(it.iteration), double(it.total_iteration), it.cost,
                            it.ml_cost, it.rel_change, it.grad_norm, it.rmse, it.mpe, it.messages, it.reals,
                            it.elapsed};
     v.push_back(vals[c]);
@@ -167,7 +173,7 @@ Summary Solver::solve(const std::vector<double>& x0, std::vector<double>* x_out)
     }
     for (std::size_t r = 0; r < cols[0].size(); ++r) {
       IterationSummary it;
-      it.phase = phase_name(static_cast<int>(cols[0][r]));
+      it.phase = algorithm_name(static_cast<int>(cols[0][r]));
       it.iteration = static_cast<std::int64_t>(cols[1][r]);
       it.total_iteration = static_cast<std::int64_t>(cols[2][r]);
       it.cost = cols[3][r];

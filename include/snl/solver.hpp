@@ -146,6 +146,12 @@ std::unique_ptr<Algorithm> make_sequential_algorithm(const std::string& name, Lo
 /// a colour per local node (owned and ghost); neighbours never share one.
 std::vector<int> jones_plassmann_coloring(DistGraph& g);
 
+/// Numeric codes of the algorithms in history/checkpoint/experiment files:
+/// 0=relaxation 1=mm 2=bb 3=pm 4=async 5=async-exact (9 for anything else).
+int algorithm_code(const std::string& name);
+const char* algorithm_name(int code);  ///< inverse of algorithm_code ("?" if unknown)
+constexpr const char* kAlgorithmCodes = "0=relaxation 1=mm 2=bb 3=pm 4=async 5=async-exact";
+
 /// Factory: relaxation, mm, bb, pm, async, async-exact. Throws snl::Error for an unknown name.
 std::unique_ptr<Algorithm> make_algorithm(const std::string& name, LocalizationProblem& prob,
                                           const SolverOptions& opt);
