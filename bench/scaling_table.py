@@ -1,21 +1,17 @@
 #!/usr/bin/env python3
 """Prints the one table of bench/scaling.sh from its records (JSON lines).
 
-Bytes-per-iteration model (all ranks, p = 2, doubles 8 B, local ids 4 B,
-offsets 8 B; n sensors, g ghosts, D = 2E directed sensor edges, A anchor
-pairs), counting every array the iteration streams once per pass, writes as
-one transfer (like STREAM), and gathered neighbour rows once (RCM locality):
-  relaxation: w = x + beta (x - prev)          read x, prev, write w   48 n
-              grad f_hat: offsets 8n, anchor offsets 8n, adjacency 4D,
-                  ranges 8D, w rows 16(n+g), anchors 12A, write g 16n
-              x(k) = w - g/L                    read w, g, write prev   48 n
-              stopping norms (x(k)-x(k-1), |g|) read prev, x, g        48 n
-            = 192 n + 16 g + 12 D + 12 A
-  mm:         offsets 8n, anchor offsets 8n, global ids 8(n+g) (own and
-              neighbours', for the edge orientation), adjacency 4D, ranges 8D,
-              x rows 16(n+g), y read+write 32D, anchors (id 4, range 8, w
-              read+write 32) 44A, write x_new 16n, stopping norms 32n
-            = 88 n + 24 g + 44 D + 44 A
+The bytes an iteration moves come from the solver itself
+(`<alg>_traffic_bytes_per_iteration` in its --json; the model is in
+docs/performance.md and in each algorithm's traffic_bytes_per_iteration()):
+every array the iteration streams counted once, writes as one transfer (like
+STREAM), gathered neighbour rows once (RCM locality). With n sensors, g ghosts,
+D = 2E directed sensor edges, A anchor pairs and p = 2 this is
+  relaxation (fused pass, since 2026-11-22 b): 80 n + 16 g + 12 D + 12 A
+  mm:                                          48 n + 16 g + 45 D + 44 A
+Older records (before the fused, SIMD kernels) lack the field; for them the
+model of that implementation is used:
+  relaxation: 192 n + 16 g + 12 D + 12 A      mm: 88 n + 24 g + 44 D + 44 A
 bound = bytes / STREAM triad bandwidth of all cores (measured in the same run).
 """
 import json
@@ -23,6 +19,9 @@ import sys
 
 
 def model_bytes(d):
+    key = d["algorithm"] + "_traffic_bytes_per_iteration"
+    if key in d:
+        return d[key]
     n, g = d["num_sensors"], d["ghosts"]
     D, A = 2 * d["sensor_pairs"], d["anchor_pairs"]
     if d["algorithm"] == "relaxation":

@@ -10,6 +10,7 @@
 #include "snl/random.hpp"
 #include "snl/solver.hpp"
 #include "algorithm_util.hpp"
+#include "kernels.hpp"
 
 namespace snl {
 
@@ -32,32 +33,53 @@ class Relaxation final : public Algorithm {
     x_ = with_ghost_rows(prob_, x0);
     prev_ = x_;  // x(-1) = x(0)
     w_.assign(x_.size(), 0.0);
-    g_.assign(std::size_t(prob_.num_owned()) * prob_.dim(), 0.0);
+    w_next_.assign(x_.size(), 0.0);
+    w_ready_ = false;
+    blk_.reserve(prob_.max_degree(), prob_.dim());
     k_ = 0;
   }
 
+  // One pass over the owned nodes: the gradient at w, x(k) = w - g/L, the
+  // norms of the stopping tests and next iteration's extrapolation point are
+  // all computed per node (one read of w and x(k-1), one write of x(k) and
+  // w(k+1)), in node order, so every sum is the one the separate loops gave.
   void iterate() override {
     ++k_;
     const int p = prob_.dim();
     const LocalId n_owned = prob_.num_owned(), n_int = prob_.graph().num_interior();
-    const double beta = static_cast<double>(k_ - 2) / static_cast<double>(k_ + 1);
-    const std::size_t m = std::size_t(n_owned) * p;
-    for (std::size_t t = 0; t < m; ++t) w_[t] = x_[t] + beta * (x_[t] - prev_[t]);
+    if (!w_ready_) {  // first iteration or after a restart
+      const double beta = static_cast<double>(k_ - 2) / static_cast<double>(k_ + 1);
+      const std::size_t m = std::size_t(n_owned) * p;
+      for (std::size_t t = 0; t < m; ++t) w_[t] = x_[t] + beta * (x_[t] - prev_[t]);
+    }
+    const double beta_next = static_cast<double>(k_ - 1) / static_cast<double>(k_ + 2);
+    double sums[3] = {0, 0, 0};
     HaloPlan& halo = prob_.graph().halo();
     halo.begin(w_.data(), p);
-    step(0, n_int);
+    step(0, n_int, beta_next, sums);
     halo.end(w_.data(), p);
-    step(n_int, n_owned);
-    diff_norms(prob_, prev_.data(), x_.data(), &diff_sq_, &x_sq_);
-    double gs = 0;
-    for (std::size_t t = 0; t < m; ++t) gs += g_[t] * g_[t];
-    gsq_ = gs;
+    step(n_int, n_owned, beta_next, sums);
+    diff_sq_ = sums[0];
+    x_sq_ = sums[1];
+    gsq_ = sums[2];
     std::swap(x_, prev_);  // x <- x(k), prev <- x(k-1)
+    std::swap(w_, w_next_);
+    w_ready_ = true;
   }
 
   const std::vector<double>& positions() const override { return x_; }
   std::int64_t memory_bytes() const override {
-    return static_cast<std::int64_t>(sizeof(double) * (x_.capacity() + prev_.capacity() + w_.capacity() + g_.capacity()));
+    return static_cast<std::int64_t>(sizeof(double) * (x_.capacity() + prev_.capacity() + w_.capacity() +
+                                                       w_next_.capacity() + blk_.t.capacity()) +
+                                     sizeof(LocalId) * blk_.src.capacity());
+  }
+  // Per owned node: offsets and anchor offsets 16, w rows 8p (own and
+  // neighbours' once, ghosts included), x(k-1) read, x(k) and w(k+1) written
+  // 24p; per slot: adjacency 4 and range 8; per anchor pair: id 4, range 8.
+  double traffic_bytes_per_iteration() const override {
+    const double p = prob_.dim(), n = prob_.num_owned(), g = prob_.num_local() - prob_.num_owned();
+    const double D = double(prob_.graph().adjacency().size()), A = double(prob_.anchor_ranges().size());
+    return 16 * n + 8 * p * (n + g) + 24 * p * n + 12 * D + 12 * A;
   }
   double objective() override {
     prob_.graph().halo().exchange(x_.data(), prob_.dim());
@@ -77,19 +99,91 @@ class Relaxation final : public Algorithm {
     k_ = static_cast<std::int64_t>(r.scalar("k"));
     r.node_rows("x", x_.data(), prob_.dim());
     r.node_rows("x_prev", prev_.data(), prob_.dim());
+    w_ready_ = false;
   }
 
  private:
-  // x(k) for owned nodes [b, e), written into prev_ (x(k-2) is no longer needed).
-  void step(LocalId b, LocalId e) {
-    relaxed_gradient(prob_, w_.data(), g_.data(), b, e);
-    const int p = prob_.dim();
-    for (std::size_t t = std::size_t(b) * p; t < std::size_t(e) * p; ++t) prev_[t] = w_[t] - g_[t] / L_;
+  // Owned nodes [b, e): g = grad f_hat(w) (003, Alg. 1 steps 7-8), x(k) = w -
+  // g/L written into prev_ (x(k-2) is no longer needed), w(k+1) = x(k) +
+  // beta_next (x(k) - x(k-1)); sums += ||x(k) - x(k-1)||^2, ||x(k)||^2, ||g||^2.
+  void step(LocalId b, LocalId e, double beta_next, double* sums) {
+    if (prob_.dim() == 2)
+      step_impl<2>(b, e, beta_next, sums);
+    else
+      step_impl<3>(b, e, beta_next, sums);
+  }
+
+  template <int P>
+  void step_impl(LocalId b, LocalId e, double beta_next, double* sums) {
+    const auto& gr = prob_.graph();
+    const LocalId* adj = gr.adjacency().data();
+    const double* rho = gr.edge_values().data();
+    const std::int64_t* aoff = prob_.anchor_offsets().data();
+    const double* w = w_.data();
+    const double* x = x_.data();
+    double *xn = prev_.data(), *wn = w_next_.data();
+    double dd = sums[0], ss = sums[1], gs = sums[2];
+    const double L = L_;
+    detail::for_node_blocks(
+        gr.offsets(), b, e, blk_,
+        [&](LocalId, LocalId, std::int64_t s0, std::int64_t n) {
+          detail::disk_terms(P, blk_.src.data(), adj + s0, rho + s0, w, n, blk_.t.data());
+        },
+        [&](LocalId v, const double* t, int deg) {
+          const std::size_t i0 = std::size_t(v) * P;
+#ifdef __SSE2__
+          if constexpr (P == 2) {  // both coordinates in one register: one divpd (the divider is the bottleneck)
+            __m128d a = detail::sum_terms_2(t, deg);
+            if (aoff[v] != aoff[v + 1]) {
+              double tmp[2];
+              _mm_storeu_pd(tmp, a);
+              detail::add_anchor_disk_terms(prob_, v, w + i0, tmp);
+              a = _mm_loadu_pd(tmp);
+            }
+            const __m128d now = _mm_sub_pd(_mm_loadu_pd(w + i0), _mm_div_pd(a, _mm_set1_pd(L)));
+            const __m128d q = _mm_sub_pd(now, _mm_loadu_pd(x + i0));
+            _mm_storeu_pd(xn + i0, now);
+            _mm_storeu_pd(wn + i0, _mm_add_pd(now, _mm_mul_pd(_mm_set1_pd(beta_next), q)));
+            const __m128d qq = _mm_mul_pd(q, q), nn = _mm_mul_pd(now, now), aa = _mm_mul_pd(a, a);
+            dd += _mm_cvtsd_f64(qq);
+            dd += _mm_cvtsd_f64(_mm_unpackhi_pd(qq, qq));
+            ss += _mm_cvtsd_f64(nn);
+            ss += _mm_cvtsd_f64(_mm_unpackhi_pd(nn, nn));
+            gs += _mm_cvtsd_f64(aa);
+            gs += _mm_cvtsd_f64(_mm_unpackhi_pd(aa, aa));
+            return;
+          }
+#endif
+          double acc[P] = {};
+          detail::sum_terms<P>(t, deg, acc);
+          if (aoff[v] != aoff[v + 1]) {  // rare at scale: keep acc in registers otherwise
+            double tmp[3];
+            for (int c = 0; c < P; ++c) tmp[c] = acc[c];
+            detail::add_anchor_disk_terms(prob_, v, w + i0, tmp);
+            for (int c = 0; c < P; ++c) acc[c] = tmp[c];
+          }
+          for (int c = 0; c < P; ++c) {
+            const std::size_t i = i0 + c;
+            const double now = w[i] - acc[c] / L, before = x[i];
+            xn[i] = now;
+            const double q = now - before;
+            dd += q * q;
+            ss += now * now;
+            gs += acc[c] * acc[c];
+            wn[i] = now + beta_next * (now - before);
+          }
+        },
+        P);
+    sums[0] = dd;
+    sums[1] = ss;
+    sums[2] = gs;
   }
 
   LocalizationProblem& prob_;
   double L_;
-  std::vector<double> x_, prev_, w_, g_;
+  std::vector<double> x_, prev_, w_, w_next_;
+  detail::SlotBlock blk_;
+  bool w_ready_ = false;
   std::int64_t k_ = 0;
   double diff_sq_ = 0, x_sq_ = 0, gsq_ = 0;
 };
@@ -140,7 +234,17 @@ class MM final : public Algorithm {
 
   const std::vector<double>& positions() const override { return x_; }
   std::int64_t memory_bytes() const override {
-    return static_cast<std::int64_t>(sizeof(double) * (x_.capacity() + xn_.capacity() + y_.capacity() + aw_.capacity()));
+    return static_cast<std::int64_t>(sizeof(double) * (x_.capacity() + xn_.capacity() + y_.capacity() +
+                                                       aw_.capacity() + blk_.t.capacity()) +
+                                     sizeof(LocalId) * blk_.src.capacity() + fwd_.capacity());
+  }
+  // Per owned node: offsets and anchor offsets 16, x rows 8p (ghosts
+  // included), x(t+1) written 8p; per slot: adjacency 4, range 8, orientation
+  // 1, y read and written 16p; per anchor pair: id 4, range 8, w read and written 16p.
+  double traffic_bytes_per_iteration() const override {
+    const double p = prob_.dim(), n = prob_.num_owned(), g = prob_.num_local() - prob_.num_owned();
+    const double D = double(prob_.graph().adjacency().size()), A = double(prob_.anchor_ranges().size());
+    return 16 * n + 8 * p * (n + g) + 8 * p * n + (13 + 16 * p) * D + (12 + 16 * p) * A;
   }
   double objective() override {
     prob_.graph().halo().exchange(x_.data(), prob_.dim());
@@ -169,9 +273,14 @@ class MM final : public Algorithm {
     const auto& adj = gr.adjacency();
     y_.assign(adj.size() * P, 0.0);
     aw_.assign(prob_.anchor_ranges().size() * P, 0.0);
+    // Orientation of each slot's edge (i < j in global ids): fixed, so kept
+    // as one byte per slot instead of looking up two global ids per iteration.
+    fwd_.assign(adj.size(), 0);
+    blk_.reserve(prob_.max_degree(), P);
     for (LocalId v = 0; v < gr.num_owned(); ++v) {
       for (auto e = off[v]; e < off[v + 1]; ++e) {
         const LocalId i = oriented_first(v, adj[e]), j = i == v ? adj[e] : v;
+        fwd_[e] = i == v ? 1 : 0;
         double* y = &y_[std::size_t(e) * P];
         for (int c = 0; c < P; ++c) y[c] = x_[std::size_t(i) * P + c] - x_[std::size_t(j) * P + c];
         project_sphere<P>(gr.edge_value(e), y);
@@ -190,60 +299,72 @@ class MM final : public Algorithm {
     return prob_.graph().global_id(v) < prob_.graph().global_id(u) ? v : u;
   }
 
+  // Owned nodes [b, e): the x-step (eq. 11) with y(t), w(t), then the y and w
+  // steps (eqs. 12-13) with x(t); x(t+1) goes to xn_. sums += ||x(t+1) -
+  // x(t)||^2, ||x(t+1)||^2 in node order. Edge slots in SIMD blocks (kernels.hpp).
   template <int P>
-  void update(LocalId b, LocalId e_end) {
+  void update(LocalId b, LocalId e_end, double* sums) {
     const auto& gr = prob_.graph();
-    const auto& off = gr.offsets();
-    const auto& adj = gr.adjacency();
     const auto& aoff = prob_.anchor_offsets();
     const auto& aid = prob_.anchor_ids();
     const auto& ar = prob_.anchor_ranges();
     const double* anc = prob_.anchors().data();
+    const LocalId* adj = gr.adjacency().data();
+    const double* rho = gr.edge_values().data();
+    const std::uint8_t* fwd = fwd_.data();
+    const double* x = x_.data();
+    double* y = y_.data();
+    double* xn = xn_.data();
     const double invL = 1.0 / L_, keep = (L_ - 1.0) / L_;
-    for (LocalId v = b; v < e_end; ++v) {
-      const double* xv = &x_[std::size_t(v) * P];
-      const GlobalId gv = gr.global_id(v);
-      double acc[P] = {};
-      // x-step with y(t), w(t) (eq. 11); then y, w steps with x(t) (eqs. 12-13).
-      for (auto e = off[v]; e < off[v + 1]; ++e) {
-        const LocalId u = adj[e];
-        const double* xu = &x_[std::size_t(u) * P];
-        double* y = &y_[std::size_t(e) * P];
-        const bool forward = gv < gr.global_id(u);  // e = (v, u)
-        const double* xi = forward ? xv : xu;
-        const double* xj = forward ? xu : xv;
-        // Orientation is data dependent (half the edges): a sign, not a
-        // branch. a + (-1 * t) == a - t exactly, so results are unchanged.
-        const double sgn = forward ? 1.0 : -1.0;
-        double dz[P];
-        for (int c = 0; c < P; ++c) dz[c] = xi[c] - xj[c];
-        for (int c = 0; c < P; ++c) acc[c] += sgn * (dz[c] - y[c]);
-        for (int c = 0; c < P; ++c) y[c] = keep * y[c] + invL * dz[c];
-        project_sphere<P>(gr.edge_value(e), y);
-      }
-      for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
-        const double* a = anc + std::size_t(aid[e]) * P;
-        double* w = &aw_[std::size_t(e) * P];
-        double dz[P];
-        for (int c = 0; c < P; ++c) dz[c] = xv[c] - a[c];
-        for (int c = 0; c < P; ++c) acc[c] += dz[c] - w[c];
-        for (int c = 0; c < P; ++c) w[c] = keep * w[c] + invL * dz[c];
-        project_sphere<P>(ar[e], w);
-      }
-      double* xo = &xn_[std::size_t(v) * P];
-      for (int c = 0; c < P; ++c) xo[c] = xv[c] - invL * acc[c];
-    }
+    double dd = sums[0], ss = sums[1];
+    detail::for_node_blocks(
+        gr.offsets(), b, e_end, blk_,
+        [&](LocalId, LocalId, std::int64_t s0, std::int64_t n) {
+          detail::mm_terms(P, blk_.src.data(), adj + s0, fwd + s0, rho + s0, x, keep, invL, n, y + s0 * P,
+                           blk_.t.data());
+        },
+        [&](LocalId v, const double* t, int deg) {
+          const double* xv = x + std::size_t(v) * P;
+          double acc[P] = {};
+#ifdef __SSE2__
+          if constexpr (P == 2)
+            _mm_storeu_pd(acc, detail::sum_terms_2(t, deg));
+          else
+#endif
+            detail::sum_terms<P>(t, deg, acc);
+          for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
+            const double* a = anc + std::size_t(aid[e]) * P;
+            double* w = &aw_[std::size_t(e) * P];
+            double dz[P];
+            for (int c = 0; c < P; ++c) dz[c] = xv[c] - a[c];
+            for (int c = 0; c < P; ++c) acc[c] += dz[c] - w[c];
+            for (int c = 0; c < P; ++c) w[c] = keep * w[c] + invL * dz[c];
+            project_sphere<P>(ar[e], w);
+          }
+          double* xo = xn + std::size_t(v) * P;
+          for (int c = 0; c < P; ++c) {
+            xo[c] = xv[c] - invL * acc[c];
+            const double q = xo[c] - xv[c];
+            dd += q * q;
+            ss += xo[c] * xo[c];
+          }
+        },
+        P);
+    sums[0] = dd;
+    sums[1] = ss;
   }
 
   template <int P>
   void iterate_impl() {
     HaloPlan& halo = prob_.graph().halo();
     const LocalId n_int = prob_.graph().num_interior(), n_owned = prob_.num_owned();
+    double sums[2] = {0, 0};
     halo.begin(x_.data(), P);
-    update<P>(0, n_int);
+    update<P>(0, n_int, sums);
     halo.end(x_.data(), P);
-    update<P>(n_int, n_owned);
-    diff_norms(prob_, xn_.data(), x_.data(), &diff_sq_, &x_sq_);
+    update<P>(n_int, n_owned, sums);
+    diff_sq_ = sums[0];
+    x_sq_ = sums[1];
     std::swap(x_, xn_);
   }
 
@@ -285,6 +406,8 @@ class MM final : public Algorithm {
   LocalizationProblem& prob_;
   double L_;
   std::vector<double> x_, xn_, y_, aw_;
+  std::vector<std::uint8_t> fwd_;
+  detail::SlotBlock blk_;
   double diff_sq_ = 0, x_sq_ = 0;
 };
 

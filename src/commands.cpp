@@ -1,10 +1,13 @@
 #include "snl/commands.hpp"
 
+#include "kernels.hpp"
+
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -388,6 +391,9 @@ int run_solve(const SolveCommand& cmd, MPI_Comm comm) {
         .add("state_bytes_per_sensor", (double(tot[2]) + double(s.algorithm_state_bytes)) / n_sens)
         .add("local_order", default_local_ordering() == LocalOrdering::kRcm ? "rcm" : "gid");
     for (const auto& ph : s.phase_iterate_seconds) j.add(ph.first + "_iterate_seconds", ph.second);
+    for (const auto& ph : s.phase_traffic_bytes)
+      if (std::isfinite(ph.second)) j.add(ph.first + "_traffic_bytes_per_iteration", ph.second);
+    j.add("simd", detail::simd_enabled() ? "avx2" : "none");
     if (s.errors.valid) {
       j.add("rmse", s.errors.rmse).add("mpe", s.errors.mpe);
       j.add("rmse_localizable", s.errors.rmse_localizable).add("mpe_localizable", s.errors.mpe_localizable);

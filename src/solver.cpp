@@ -235,6 +235,9 @@ Summary Solver::solve(const std::vector<double>& x0, std::vector<double>* x_out)
       long long b = alg->memory_bytes(), all = 0;
       MPI_Allreduce(&b, &all, 1, MPI_LONG_LONG, MPI_SUM, comm);
       sum.algorithm_state_bytes = std::max<std::int64_t>(sum.algorithm_state_bytes, all);
+      double tb = alg->traffic_bytes_per_iteration(), tb_all = 0;
+      MPI_Allreduce(&tb, &tb_all, 1, MPI_DOUBLE, MPI_SUM, comm);
+      sum.phase_traffic_bytes.emplace_back(phases[ph], tb_all);
     }
     double phase_time = 0;
     std::int64_t k = 0;

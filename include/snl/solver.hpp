@@ -103,6 +103,8 @@ struct Summary {
   std::vector<std::pair<std::string, double>> phase_iterate_seconds;
   /// Algorithm state (iterates, edge variables), all ranks; max over phases.
   std::int64_t algorithm_state_bytes = 0;
+  /// Per phase: modelled memory traffic of one iteration, all ranks (bytes).
+  std::vector<std::pair<std::string, double>> phase_traffic_bytes;
   double lipschitz = NAN;
   int ranks = 1;
   std::vector<IterationSummary> history;
@@ -134,6 +136,10 @@ class Algorithm {
   virtual double lipschitz() const { return std::numeric_limits<double>::quiet_NaN(); }
   /// Bytes of this rank's state arrays (capacities), for the memory report.
   virtual std::int64_t memory_bytes() const { return 0; }
+  /// Bytes this rank must move to or from memory in one iteration: every
+  /// array streamed once, gathered neighbour rows once (the model of
+  /// docs/performance.md, for the bandwidth bound); NaN if not modelled.
+  virtual double traffic_bytes_per_iteration() const { return std::numeric_limits<double>::quiet_NaN(); }
   /// Collective. Everything needed to continue bit for bit (after start()).
   virtual void save(StateWriter& w) const = 0;
   virtual void load(const StateReader& r) = 0;
