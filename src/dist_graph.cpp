@@ -201,6 +201,12 @@ DistGraph::DistGraph(MPI_Comm comm, GlobalId n, const std::vector<int>& owner, c
                      const std::vector<double>& edge_values, int width, int halo_width, LocalOrdering ordering)
     : comm_(comm), n_global_(n), width_(width) {
   const int size = comm_size(comm), rank = comm_rank(comm);
+  double tmark = MPI_Wtime();
+  auto phase_done = [&](const char* name) {
+    const double now = MPI_Wtime();
+    build_phases_.emplace_back(name, now - tmark);
+    tmark = now;
+  };
   // 1. Every edge goes to the owners of both ends (once if they coincide).
   std::vector<std::vector<EdgeRec>> out(size);
   std::vector<std::vector<double>> out_vals(size);
@@ -219,6 +225,7 @@ DistGraph::DistGraph(MPI_Comm comm, GlobalId n, const std::vector<int>& owner, c
   out.clear();
   out_vals.clear();
 
+  phase_done("exchange");
   // 2. Owned nodes in global order, then per-node neighbour lists.
   std::vector<GlobalId> owned;
   for (GlobalId g = 0; g < n; ++g)
@@ -253,6 +260,7 @@ DistGraph::DistGraph(MPI_Comm comm, GlobalId n, const std::vector<int>& owner, c
       if (owner[entries[k].nbr] != rank) boundary[v] = 1;
   }
 
+  phase_done("lists");
   // 3. Local numbering: interior owned, boundary owned (each group in RCM or
   //    global order), ghosts by (owner, gid) so each neighbour's slots are contiguous.
   std::vector<std::int64_t> order;  // owned index in local order
@@ -275,6 +283,7 @@ DistGraph::DistGraph(MPI_Comm comm, GlobalId n, const std::vector<int>& owner, c
     n_interior_ = static_cast<LocalId>(order.size());
     order.insert(order.end(), group[1].begin(), group[1].end());
   }
+  phase_done("order");
   n_owned_ = static_cast<LocalId>(owned.size());
   std::vector<GlobalId> ghosts;
   for (const auto& en : entries)
@@ -319,6 +328,7 @@ DistGraph::DistGraph(MPI_Comm comm, GlobalId n, const std::vector<int>& owner, c
     offsets_[l + 1] = pos;
   }
 
+  phase_done("csr");
   // 5. Halo plan: tell each owner which of its nodes we need, in our ghost order.
   std::vector<std::vector<GlobalId>> requests(size);
   for (GlobalId g : ghosts) requests[owner[g]].push_back(g);
@@ -358,6 +368,7 @@ DistGraph::DistGraph(MPI_Comm comm, GlobalId n, const std::vector<int>& owner, c
   // The graph is undirected, so the ranks we receive from are those we send to.
   if (senders != nbr_ranks) throw Error("internal error: asymmetric halo (edges not symmetric?)");
   halo_ = HaloPlan(comm, n_owned_, nbr_ranks, std::move(send_ids), recv_offset, recv_count, halo_width);
+  phase_done("halo");
 }
 
 std::int64_t DistGraph::memory_bytes() const {

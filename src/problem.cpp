@@ -59,6 +59,12 @@ void LocalizationProblem::build(MPI_Comm comm, const Network& slab, PartitionMet
   const GlobalId n = slab.num_sensors;
   const int p = dim_;
   ProblemReport rep;
+  double tmark = MPI_Wtime();
+  auto phase_done = [&](const std::string& name) {
+    const double now = MPI_Wtime();
+    rep.setup_phases.emplace_back(name, now - tmark);
+    tmark = now;
+  };
 
   // 1. Merge duplicates: route every measurement to the block owner of its
   //    smaller sensor id, where all copies of a pair meet.
@@ -104,6 +110,7 @@ void LocalizationProblem::build(MPI_Comm comm, const Network& slab, PartitionMet
     rep.num_anchor_edges = sum[3];
   }
 
+  phase_done("merge");
   // 2. Connectivity and anchoring on rank 0 (union-find over all edges).
   std::vector<std::uint8_t> unanchored_flag;  // [n] on every rank, filled below
   {
@@ -123,8 +130,12 @@ void LocalizationProblem::build(MPI_Comm comm, const Network& slab, PartitionMet
   }
 
   // 3. Partition and distribute the sensor graph; ranges ride along as edge data.
+  phase_done("connectivity");
   std::vector<int> owner = partition_graph(comm, n, sedges, method, &rep.partition);
+  phase_done("partition");
   graph_ = DistGraph(comm, n, owner, sedges, sranges, 1, std::max(p, 2));
+  phase_done("graph");
+  for (const auto& ph : graph_.build_phases()) rep.setup_phases.emplace_back("graph." + ph.first, ph.second);
   sedges.clear();
   sedges.shrink_to_fit();
   sranges.clear();
@@ -209,6 +220,7 @@ void LocalizationProblem::build(MPI_Comm comm, const Network& slab, PartitionMet
   }
   delta_max_ = graph_.max_degree();
   MPI_Allreduce(&maxa, &max_anchor_deg_, 1, MPI_INT, MPI_MAX, comm);
+  phase_done("anchors_flags");
   if (report) *report = rep;
 }
 

@@ -85,6 +85,10 @@ class DistGraph {
   HaloPlan& halo() { return halo_; }
   const HaloPlan& halo() const { return halo_; }
 
+  /// Seconds spent in the constructor's phases on this rank (exchange, csr,
+  /// order, halo), for the setup report.
+  const std::vector<std::pair<std::string, double>>& build_phases() const { return build_phases_; }
+
   /// Bytes held by the graph's arrays (capacities), halo buffers included.
   std::int64_t memory_bytes() const;
 
@@ -98,6 +102,7 @@ class DistGraph {
   LocalId n_owned_ = 0, n_interior_ = 0;
   int width_ = 0;
   std::vector<GlobalId> local_to_global_;
+  std::vector<std::pair<std::string, double>> build_phases_;
   std::vector<std::int64_t> offsets_;
   std::vector<LocalId> adjacency_;
   std::vector<double> edge_values_;

@@ -6,6 +6,8 @@
 #include <mpi.h>
 
 #include <cstdint>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "snl/dist_graph.hpp"
@@ -22,6 +24,9 @@ struct ProblemReport {
   GlobalId few_measurements = 0;    ///< sensors with fewer than p+1 measurements
   GlobalId unlocalizable = 0;       ///< sensors flagged by either test or by the file's report
   std::vector<GlobalId> unlocalizable_sample;  ///< the first (up to 20) such ids
+  /// Setup time by phase (rank 0's clock, after a barrier-free pass): merge,
+  /// connectivity, partition, graph (with the graph's own phases), anchors.
+  std::vector<std::pair<std::string, double>> setup_phases;
 };
 
 class LocalizationProblem {
