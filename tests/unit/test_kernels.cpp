@@ -50,7 +50,8 @@ Slots make_slots(int p, std::int64_t n, LocalId m, unsigned seed) {
 }
 
 bool same_bits(const std::vector<double>& a, const std::vector<double>& b) {
-  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
+  // memcmp on an empty vector's data() (possibly null) is undefined, hence the size test first.
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0);
 }
 
 }  // namespace
