@@ -137,9 +137,23 @@ struct Entry {
 std::vector<std::int64_t> rcm_order(const std::vector<std::int64_t>& nodes, const std::vector<std::int64_t>& cnt,
                                     const std::vector<std::int64_t>& nbrs, const std::vector<std::int64_t>& pos) {
   const std::size_t m = nodes.size();
-  std::vector<std::int32_t> deg(m, 0);
-  for (std::size_t t = 0; t < m; ++t)
-    for (auto k = cnt[nodes[t]]; k < cnt[nodes[t] + 1]; ++k) deg[t] += nbrs[k] >= 0 && pos[nbrs[k]] >= 0;
+  // The group's own adjacency in group positions (32-bit), neighbours in the
+  // same order as in `nbrs`: the scattered nodes -> cnt -> nbrs -> pos lookups
+  // are done once here instead of in each of the two BFS sweeps.
+  std::vector<std::int64_t> off(m + 1, 0);
+  std::vector<std::int32_t> adj;
+  {
+    std::size_t total = 0;
+    for (std::size_t t = 0; t < m; ++t) total += std::size_t(cnt[nodes[t] + 1] - cnt[nodes[t]]);
+    adj.reserve(total);
+  }
+  for (std::size_t t = 0; t < m; ++t) {
+    for (auto k = cnt[nodes[t]]; k < cnt[nodes[t] + 1]; ++k)
+      if (nbrs[k] >= 0 && pos[nbrs[k]] >= 0) adj.push_back(static_cast<std::int32_t>(pos[nbrs[k]]));
+    off[t + 1] = static_cast<std::int64_t>(adj.size());
+  }
+  std::vector<std::int32_t> deg(m);
+  for (std::size_t t = 0; t < m; ++t) deg[t] = static_cast<std::int32_t>(off[t + 1] - off[t]);
   std::vector<std::int64_t> order;  // positions in `nodes`
   order.reserve(m);
   std::vector<char> seen(m, 0);
@@ -154,10 +168,9 @@ std::vector<std::int64_t> rcm_order(const std::vector<std::int64_t>& nodes, cons
     for (std::size_t h = 0; h < queue.size(); ++h) {
       const std::int64_t t = queue[h];
       if (level[t] > level[best] || (level[t] == level[best] && deg[t] < deg[best])) best = t;
-      for (auto k = cnt[nodes[t]]; k < cnt[nodes[t] + 1]; ++k) {
-        if (nbrs[k] < 0) continue;
-        const std::int64_t u = pos[nbrs[k]];
-        if (u >= 0 && !seen[u] && level[u] < 0) {
+      for (auto k = off[t]; k < off[t + 1]; ++k) {
+        const std::int64_t u = adj[k];
+        if (!seen[u] && level[u] < 0) {
           level[u] = level[t] + 1;
           queue.push_back(u);
         }
@@ -179,10 +192,9 @@ std::vector<std::int64_t> rcm_order(const std::vector<std::int64_t>& nodes, cons
     for (; head < order.size(); ++head) {
       const std::int64_t t = order[head];
       kids.clear();
-      for (auto k = cnt[nodes[t]]; k < cnt[nodes[t] + 1]; ++k) {
-        if (nbrs[k] < 0) continue;
-        const std::int64_t u = pos[nbrs[k]];
-        if (u >= 0 && !seen[u]) {
+      for (auto k = off[t]; k < off[t + 1]; ++k) {
+        const std::int64_t u = adj[k];
+        if (!seen[u]) {
           seen[u] = 1;
           kids.push_back(u);
         }
