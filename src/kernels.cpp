@@ -129,6 +129,8 @@ SNL_AVX2 void disk_terms_avx2(const LocalId* src, const LocalId* adj, const doub
     const __m256d c = _mm256_sub_pd(one, _mm256_div_pd(r, nz));
     store_pairs(t + 2 * k, _mm256_and_pd(_mm256_mul_pd(c, z0), mask), _mm256_and_pd(_mm256_mul_pd(c, z1), mask));
   }
+  // GCC emits no vzeroupper before this tail call: without it the dirty upper
+  // ymm halves slowed the caller's SSE node phase by ~40% (docs/performance.md).
   _mm256_zeroupper();
   disk_terms_scalar<2>(src + k, adj + k, rho + k, x, n - k, t + 2 * k);
 }
@@ -170,7 +172,7 @@ SNL_AVX2 void mm_terms_avx2(const LocalId* src, const LocalId* adj, const std::u
     y1 = _mm256_blendv_pd(zero, _mm256_mul_pd(y1, f), pos);
     store_pairs(y + 2 * k, y0, y1);
   }
-  _mm256_zeroupper();
+  _mm256_zeroupper();  // as in disk_terms_avx2
   mm_terms_scalar<2>(src + k, adj + k, fwd + k, rho + k, x, keep, invL, n - k, y + 2 * k, t + 2 * k);
 }
 #endif
