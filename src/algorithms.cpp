@@ -132,7 +132,7 @@ class Relaxation final : public Algorithm {
         [&](LocalId v, const double* t, int deg) {
           const std::size_t i0 = std::size_t(v) * P;
 #ifdef __SSE2__
-          if constexpr (P == 2) {  // both coordinates in one register: one divpd (the divider is the bottleneck)
+          if constexpr (P == 2) {  // both coordinates in one register: one divpd instead of two divsd
             __m128d a = detail::sum_terms_2(t, deg);
             if (aoff[v] != aoff[v + 1]) {
               double tmp[2];
