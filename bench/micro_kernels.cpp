@@ -52,12 +52,17 @@ LocalizationProblem& problem(bool rcm) {
   return *slot;
 }
 
-std::vector<double> local_positions(LocalizationProblem& prob) {
-  auto x0 = random_initial_positions(prob, 1);
-  std::vector<double> x(std::size_t(prob.num_local()) * prob.dim(), 0.0);
-  std::copy(x0.begin(), x0.end(), x.begin());
-  prob.graph().halo().exchange(x.data(), prob.dim());
+// Owned rows followed by the ghosts' rows, filled by a halo exchange.
+std::vector<double> with_ghosts(LocalizationProblem& prob, const std::vector<double>& owned) {
+  const int p = prob.dim();
+  std::vector<double> x(std::size_t(prob.num_local()) * p, 0.0);
+  std::copy(owned.begin(), owned.begin() + std::ptrdiff_t(prob.num_owned()) * p, x.begin());
+  prob.graph().halo().exchange(x.data(), p);
   return x;
+}
+
+std::vector<double> local_positions(LocalizationProblem& prob) {
+  return with_ghosts(prob, random_initial_positions(prob, 1));
 }
 
 void report(benchmark::State& st, const LocalizationProblem& prob) {
@@ -92,14 +97,11 @@ constexpr char kMM[] = "mm";
 constexpr char kRelax[] = "relaxation";
 
 // Fraction of directed sensor edges whose current length is within the range
-// (|x_v - x_u| <= rho: the disk term is zero). The relaxation's cost per
-// iteration depends on it (the AVX2 kernel skips the divider for groups of
-// four such slots), and it grows from ~0 at a random start towards 1.
+// (|x_v - x_u| <= rho: the disk term is zero); it grows from ~0 at a random
+// start towards 1, and says which state an iteration was timed in (2D).
 double inside_fraction(LocalizationProblem& prob, const std::vector<double>& owned_x) {
-  auto& g = prob.graph();
-  std::vector<double> x(std::size_t(g.num_local()) * 2, 0.0);
-  std::copy(owned_x.begin(), owned_x.begin() + std::ptrdiff_t(g.num_owned()) * 2, x.begin());
-  g.halo().exchange(x.data(), 2);
+  const auto x = with_ghosts(prob, owned_x);
+  const auto& g = prob.graph();
   const auto& off = g.offsets();
   const auto& adj = g.adjacency();
   const auto& rho = g.edge_values();

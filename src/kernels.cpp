@@ -92,7 +92,11 @@ void mm_terms_scalar(const LocalId* src, const LocalId* adj, const std::uint8_t*
 // unpack the lanes hold slots in the order (0, 2, 1, 3), so per-slot scalars
 // (rho, fwd) are permuted the same way and the terms are re-interleaved on
 // the way out. Only IEEE add/sub/mul/div/sqrt: no FMA (not enabled for these
-// functions), so every lane equals the scalar result bit for bit.
+// functions), so every lane equals the scalar result bit for bit. They take
+// whole groups of 4 slots and return; the dispatcher runs the scalar twin on
+// the rest. (A tail call from here into the scalar code got no vzeroupper from
+// GCC, and the dirty upper ymm state slowed the caller's SSE node phase by
+// ~40%: docs/performance.md.)
 #define SNL_AVX2 __attribute__((target("avx2")))
 
 SNL_AVX2 inline void load_rows(const double* x, const LocalId* idx, __m256d* X, __m256d* Y) {
@@ -129,10 +133,6 @@ SNL_AVX2 void disk_terms_avx2(const LocalId* src, const LocalId* adj, const doub
     const __m256d c = _mm256_sub_pd(one, _mm256_div_pd(r, nz));
     store_pairs(t + 2 * k, _mm256_and_pd(_mm256_mul_pd(c, z0), mask), _mm256_and_pd(_mm256_mul_pd(c, z1), mask));
   }
-  // GCC emits no vzeroupper before this tail call: without it the dirty upper
-  // ymm halves slowed the caller's SSE node phase by ~40% (docs/performance.md).
-  _mm256_zeroupper();
-  disk_terms_scalar<2>(src + k, adj + k, rho + k, x, n - k, t + 2 * k);
 }
 
 SNL_AVX2 void mm_terms_avx2(const LocalId* src, const LocalId* adj, const std::uint8_t* fwd, const double* rho,
@@ -172,8 +172,6 @@ SNL_AVX2 void mm_terms_avx2(const LocalId* src, const LocalId* adj, const std::u
     y1 = _mm256_blendv_pd(zero, _mm256_mul_pd(y1, f), pos);
     store_pairs(y + 2 * k, y0, y1);
   }
-  _mm256_zeroupper();  // as in disk_terms_avx2
-  mm_terms_scalar<2>(src + k, adj + k, fwd + k, rho + k, x, keep, invL, n - k, y + 2 * k, t + 2 * k);
 }
 #endif
 
@@ -213,7 +211,11 @@ void disk_terms(int p, const LocalId* src, const LocalId* adj, const double* rho
                 double* t) {
   if (p == 3) return disk_terms_scalar<3>(src, adj, rho, x, n, t);
 #ifdef SNL_HAVE_AVX2_PATH
-  if (g_simd) return disk_terms_avx2(src, adj, rho, x, n, t);
+  if (g_simd) {
+    const std::int64_t k = n & ~std::int64_t(3);
+    disk_terms_avx2(src, adj, rho, x, k, t);
+    return disk_terms_scalar<2>(src + k, adj + k, rho + k, x, n - k, t + 2 * k);
+  }
 #endif
   disk_terms_scalar<2>(src, adj, rho, x, n, t);
 }
@@ -222,7 +224,11 @@ void mm_terms(int p, const LocalId* src, const LocalId* adj, const std::uint8_t*
               const double* x, double keep, double invL, std::int64_t n, double* y, double* t) {
   if (p == 3) return mm_terms_scalar<3>(src, adj, fwd, rho, x, keep, invL, n, y, t);
 #ifdef SNL_HAVE_AVX2_PATH
-  if (g_simd) return mm_terms_avx2(src, adj, fwd, rho, x, keep, invL, n, y, t);
+  if (g_simd) {
+    const std::int64_t k = n & ~std::int64_t(3);
+    mm_terms_avx2(src, adj, fwd, rho, x, keep, invL, k, y, t);
+    return mm_terms_scalar<2>(src + k, adj + k, fwd + k, rho + k, x, keep, invL, n - k, y + 2 * k, t + 2 * k);
+  }
 #endif
   mm_terms_scalar<2>(src, adj, fwd, rho, x, keep, invL, n, y, t);
 }
