@@ -35,30 +35,35 @@ class Relaxation final : public Algorithm {
     w_.assign(x_.size(), 0.0);
     w_next_.assign(x_.size(), 0.0);
     w_ready_ = false;
-    blk_.reserve(prob_.max_degree(), prob_.dim());
+    lanes_.build(prob_);
     k_ = 0;
   }
 
-  // One pass over the owned nodes: the gradient at w, x(k) = w - g/L, the
-  // norms of the stopping tests and next iteration's extrapolation point are
-  // all computed per node (one read of w and x(k-1), one write of x(k) and
-  // w(k+1)), in node order, so every sum is the one the separate loops gave.
+  // One pass over the owned nodes, in chunks of SIMD lanes (kernels.hpp): the
+  // gradient at w, x(k) = w - g/L, the norms of the stopping tests and next
+  // iteration's extrapolation point are all computed per node (one read of w
+  // and x(k-1), one write of x(k) and w(k+1)). The norms are summed per lane,
+  // then over the lanes in lane order.
   void iterate() override {
     ++k_;
     const int p = prob_.dim();
-    const LocalId n_owned = prob_.num_owned(), n_int = prob_.graph().num_interior();
+    const LocalId n_owned = prob_.num_owned();
     if (!w_ready_) {  // first iteration or after a restart
       const double beta = static_cast<double>(k_ - 2) / static_cast<double>(k_ + 1);
       const std::size_t m = std::size_t(n_owned) * p;
       for (std::size_t t = 0; t < m; ++t) w_[t] = x_[t] + beta * (x_[t] - prev_[t]);
     }
     const double beta_next = static_cast<double>(k_ - 1) / static_cast<double>(k_ + 2);
-    double sums[3] = {0, 0, 0};
+    std::fill(std::begin(norms_), std::end(norms_), 0.0);
     HaloPlan& halo = prob_.graph().halo();
     halo.begin(w_.data(), p);
-    step(0, n_int, beta_next, sums);
+    step(0, lanes_.split, beta_next);
     halo.end(w_.data(), p);
-    step(n_int, n_owned, beta_next, sums);
+    step(lanes_.split, lanes_.size(), beta_next);
+    const int C = lanes_.lanes;
+    double sums[3] = {0, 0, 0};
+    for (int j = 0; j < 3; ++j)
+      for (int q = 0; q < C; ++q) sums[j] += norms_[j * C + q];
     diff_sq_ = sums[0];
     x_sq_ = sums[1];
     gsq_ = sums[2];
@@ -70,8 +75,7 @@ class Relaxation final : public Algorithm {
   const std::vector<double>& positions() const override { return x_; }
   std::int64_t memory_bytes() const override {
     return static_cast<std::int64_t>(sizeof(double) * (x_.capacity() + prev_.capacity() + w_.capacity() +
-                                                       w_next_.capacity() + blk_.t.capacity()) +
-                                     sizeof(LocalId) * blk_.src.capacity());
+                                                       w_next_.capacity())) + lanes_.bytes();
   }
   // Per owned node: offsets and anchor offsets 16, w rows 8p (own and
   // neighbours' once, ghosts included), x(k-1) read, x(k) and w(k+1) written
@@ -103,86 +107,19 @@ class Relaxation final : public Algorithm {
   }
 
  private:
-  // Owned nodes [b, e): g = grad f_hat(w) (003, Alg. 1 steps 7-8), x(k) = w -
-  // g/L written into prev_ (x(k-2) is no longer needed), w(k+1) = x(k) +
-  // beta_next (x(k) - x(k-1)); sums += ||x(k) - x(k-1)||^2, ||x(k)||^2, ||g||^2.
-  void step(LocalId b, LocalId e, double beta_next, double* sums) {
-    if (prob_.dim() == 2)
-      step_impl<2>(b, e, beta_next, sums);
-    else
-      step_impl<3>(b, e, beta_next, sums);
-  }
-
-  template <int P>
-  void step_impl(LocalId b, LocalId e, double beta_next, double* sums) {
-    const auto& gr = prob_.graph();
-    const LocalId* adj = gr.adjacency().data();
-    const double* rho = gr.edge_values().data();
-    const std::int64_t* aoff = prob_.anchor_offsets().data();
-    const double* w = w_.data();
-    const double* x = x_.data();
-    double *xn = prev_.data(), *wn = w_next_.data();
-    double dd = sums[0], ss = sums[1], gs = sums[2];
-    const double L = L_;
-    detail::for_node_blocks(
-        gr.offsets(), b, e, blk_,
-        [&](LocalId, LocalId, std::int64_t s0, std::int64_t n) {
-          detail::disk_terms(P, blk_.src.data(), adj + s0, rho + s0, w, n, blk_.t.data());
-        },
-        [&](LocalId v, const double* t, int deg) {
-          const std::size_t i0 = std::size_t(v) * P;
-#ifdef __SSE2__
-          if constexpr (P == 2) {  // both coordinates in one register: one divpd instead of two divsd
-            __m128d a = detail::sum_terms_2(t, deg);
-            if (aoff[v] != aoff[v + 1]) {
-              double tmp[2];
-              _mm_storeu_pd(tmp, a);
-              detail::add_anchor_disk_terms(prob_, v, w + i0, tmp);
-              a = _mm_loadu_pd(tmp);
-            }
-            const __m128d now = _mm_sub_pd(_mm_loadu_pd(w + i0), _mm_div_pd(a, _mm_set1_pd(L)));
-            const __m128d q = _mm_sub_pd(now, _mm_loadu_pd(x + i0));
-            _mm_storeu_pd(xn + i0, now);
-            _mm_storeu_pd(wn + i0, _mm_add_pd(now, _mm_mul_pd(_mm_set1_pd(beta_next), q)));
-            const __m128d qq = _mm_mul_pd(q, q), nn = _mm_mul_pd(now, now), aa = _mm_mul_pd(a, a);
-            dd += _mm_cvtsd_f64(qq);
-            dd += _mm_cvtsd_f64(_mm_unpackhi_pd(qq, qq));
-            ss += _mm_cvtsd_f64(nn);
-            ss += _mm_cvtsd_f64(_mm_unpackhi_pd(nn, nn));
-            gs += _mm_cvtsd_f64(aa);
-            gs += _mm_cvtsd_f64(_mm_unpackhi_pd(aa, aa));
-            return;
-          }
-#endif
-          double acc[P] = {};
-          detail::sum_terms<P>(t, deg, acc);
-          if (aoff[v] != aoff[v + 1]) {  // rare at scale: keep acc in registers otherwise
-            double tmp[3];
-            for (int c = 0; c < P; ++c) tmp[c] = acc[c];
-            detail::add_anchor_disk_terms(prob_, v, w + i0, tmp);
-            for (int c = 0; c < P; ++c) acc[c] = tmp[c];
-          }
-          for (int c = 0; c < P; ++c) {
-            const std::size_t i = i0 + c;
-            const double now = w[i] - acc[c] / L, before = x[i];
-            xn[i] = now;
-            const double q = now - before;
-            dd += q * q;
-            ss += now * now;
-            gs += acc[c] * acc[c];
-            wn[i] = now + beta_next * (now - before);
-          }
-        },
-        P);
-    sums[0] = dd;
-    sums[1] = ss;
-    sums[2] = gs;
+  // Chunks [c0, c1) of nodes (kernels.hpp): g = grad f_hat(w) (003, Alg. 1
+  // steps 7-8), x(k) = w - g/L written into prev_ (x(k-2) is no longer
+  // needed), w(k+1) = x(k) + beta_next (x(k) - x(k-1)), lane sums of the norms.
+  void step(std::int64_t c0, std::int64_t c1, double beta_next) {
+    detail::relax_chunks(prob_, lanes_, c0, c1,
+                         {w_.data(), x_.data(), prev_.data(), w_next_.data(), L_, beta_next, norms_});
   }
 
   LocalizationProblem& prob_;
   double L_;
   std::vector<double> x_, prev_, w_, w_next_;
-  detail::SlotBlock blk_;
+  detail::NodeLanes lanes_;
+  double norms_[3 * 8];  // per lane: ||x(k) - x(k-1)||^2, ||x(k)||^2, ||g||^2
   bool w_ready_ = false;
   std::int64_t k_ = 0;
   double diff_sq_ = 0, x_sq_ = 0, gsq_ = 0;
@@ -193,19 +130,7 @@ class Relaxation final : public Algorithm {
 // L = 2 delta_max + max|A_i| + 2 (eq. 9). Edge variables y_e live with both
 // ends of the edge and are updated redundantly with identical arithmetic, with
 // the fixed orientation e = (i, j), i < j in global ids.
-template <int P>
-inline void project_sphere(double rho, double* v) {
-  double s = 0;
-  for (int c = 0; c < P; ++c) s += v[c] * v[c];
-  const double nv = std::sqrt(s);
-  if (nv > 0) {
-    const double f = rho / nv;
-    for (int c = 0; c < P; ++c) v[c] *= f;
-  } else {  // P_sphere(0) = rho e_1 (spec convention)
-    v[0] = rho;
-    for (int c = 1; c < P; ++c) v[c] = 0;
-  }
-}
+using detail::project_sphere;
 
 class MM final : public Algorithm {
  public:
@@ -219,24 +144,37 @@ class MM final : public Algorithm {
     x_ = with_ghost_rows(prob_, x0);
     xn_ = x_;
     prob_.graph().halo().exchange(x_.data(), prob_.dim());
+    lanes_.build(prob_);
     if (prob_.dim() == 2)
       init<2>();
     else
       init<3>();
   }
 
+  // Halo begin -> interior chunks -> halo end -> boundary chunks; the norms
+  // are summed per lane, then over the lanes in lane order.
   void iterate() override {
-    if (prob_.dim() == 2)
-      iterate_impl<2>();
-    else
-      iterate_impl<3>();
+    HaloPlan& halo = prob_.graph().halo();
+    const int C = lanes_.lanes;
+    std::fill(std::begin(norms_), std::end(norms_), 0.0);
+    const detail::MMStep st{x_.data(), xn_.data(), y_.data(), aw_.data(), (L_ - 1.0) / L_, 1.0 / L_, norms_};
+    halo.begin(x_.data(), prob_.dim());
+    detail::mm_chunks(prob_, lanes_, 0, lanes_.split, st);
+    halo.end(x_.data(), prob_.dim());
+    detail::mm_chunks(prob_, lanes_, lanes_.split, lanes_.size(), st);
+    double sums[2] = {0, 0};
+    for (int j = 0; j < 2; ++j)
+      for (int q = 0; q < C; ++q) sums[j] += norms_[j * C + q];
+    diff_sq_ = sums[0];
+    x_sq_ = sums[1];
+    std::swap(x_, xn_);
   }
 
   const std::vector<double>& positions() const override { return x_; }
   std::int64_t memory_bytes() const override {
     return static_cast<std::int64_t>(sizeof(double) * (x_.capacity() + xn_.capacity() + y_.capacity() +
-                                                       aw_.capacity() + blk_.t.capacity()) +
-                                     sizeof(LocalId) * blk_.src.capacity() + fwd_.capacity());
+                                                       aw_.capacity())) +
+           lanes_.bytes();
   }
   // Per owned node: offsets and anchor offsets 16, x rows 8p (ghosts
   // included), x(t+1) written 8p; per slot: adjacency 4, range 8, orientation
@@ -254,36 +192,47 @@ class MM final : public Algorithm {
     *d = diff_sq_;
     *s = x_sq_;
   }
+  // Checkpoints hold y in CSR slot order (independent of the SIMD lane width).
   void save(StateWriter& w) const override {
     w.node_rows("x", x_.data(), prob_.dim());
-    w.edge_rows("y", y_.data(), prob_.dim());
+    std::vector<double> y(prob_.graph().adjacency().size() * prob_.dim());
+    for_slots([&](std::size_t e, int c, std::size_t at) { y[e * prob_.dim() + c] = y_[at]; });
+    w.edge_rows("y", y.data(), prob_.dim());
     w.anchor_rows("w", aw_.data(), prob_.dim());
   }
   void load(const StateReader& r) override {
     r.node_rows("x", x_.data(), prob_.dim());
-    r.edge_rows("y", y_.data(), prob_.dim());
+    std::vector<double> y(prob_.graph().adjacency().size() * prob_.dim());
+    r.edge_rows("y", y.data(), prob_.dim());
+    for_slots([&](std::size_t e, int c, std::size_t at) { y_[at] = y[e * prob_.dim() + c]; });
     r.anchor_rows("w", aw_.data(), prob_.dim());
   }
 
  private:
+  // f(CSR slot e, coordinate c, index of y_e[c] in the lane layout).
+  template <class F>
+  void for_slots(F&& f) const {
+    const auto& off = prob_.graph().offsets();
+    const int p = prob_.dim();
+    for (LocalId v = 0; v < prob_.num_owned(); ++v)
+      for (auto e = off[v]; e < off[v + 1]; ++e)
+        for (int c = 0; c < p; ++c) f(std::size_t(e), c, lanes_.at(v, e - off[v], p, c));
+  }
+
   template <int P>
   void init() {
     const auto& gr = prob_.graph();
     const auto& off = gr.offsets();
     const auto& adj = gr.adjacency();
-    y_.assign(adj.size() * P, 0.0);
+    y_.assign(std::size_t(lanes_.groups()) * lanes_.lanes * P, 0.0);
     aw_.assign(prob_.anchor_ranges().size() * P, 0.0);
-    // Orientation of each slot's edge (i < j in global ids): fixed, so kept
-    // as one byte per slot instead of looking up two global ids per iteration.
-    fwd_.assign(adj.size(), 0);
-    blk_.reserve(prob_.max_degree(), P);
     for (LocalId v = 0; v < gr.num_owned(); ++v) {
       for (auto e = off[v]; e < off[v + 1]; ++e) {
         const LocalId i = oriented_first(v, adj[e]), j = i == v ? adj[e] : v;
-        fwd_[e] = i == v ? 1 : 0;
-        double* y = &y_[std::size_t(e) * P];
+        double y[P];
         for (int c = 0; c < P; ++c) y[c] = x_[std::size_t(i) * P + c] - x_[std::size_t(j) * P + c];
         project_sphere<P>(gr.edge_value(e), y);
+        for (int c = 0; c < P; ++c) y_[lanes_.at(v, e - off[v], P, c)] = y[c];
       }
       const auto& aoff = prob_.anchor_offsets();
       for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
@@ -297,75 +246,6 @@ class MM final : public Algorithm {
 
   LocalId oriented_first(LocalId v, LocalId u) const {
     return prob_.graph().global_id(v) < prob_.graph().global_id(u) ? v : u;
-  }
-
-  // Owned nodes [b, e): the x-step (eq. 11) with y(t), w(t), then the y and w
-  // steps (eqs. 12-13) with x(t); x(t+1) goes to xn_. sums += ||x(t+1) -
-  // x(t)||^2, ||x(t+1)||^2 in node order. Edge slots in SIMD blocks (kernels.hpp).
-  template <int P>
-  void update(LocalId b, LocalId e_end, double* sums) {
-    const auto& gr = prob_.graph();
-    const auto& aoff = prob_.anchor_offsets();
-    const auto& aid = prob_.anchor_ids();
-    const auto& ar = prob_.anchor_ranges();
-    const double* anc = prob_.anchors().data();
-    const LocalId* adj = gr.adjacency().data();
-    const double* rho = gr.edge_values().data();
-    const std::uint8_t* fwd = fwd_.data();
-    const double* x = x_.data();
-    double* y = y_.data();
-    double* xn = xn_.data();
-    const double invL = 1.0 / L_, keep = (L_ - 1.0) / L_;
-    double dd = sums[0], ss = sums[1];
-    detail::for_node_blocks(
-        gr.offsets(), b, e_end, blk_,
-        [&](LocalId, LocalId, std::int64_t s0, std::int64_t n) {
-          detail::mm_terms(P, blk_.src.data(), adj + s0, fwd + s0, rho + s0, x, keep, invL, n, y + s0 * P,
-                           blk_.t.data());
-        },
-        [&](LocalId v, const double* t, int deg) {
-          const double* xv = x + std::size_t(v) * P;
-          double acc[P] = {};
-#ifdef __SSE2__
-          if constexpr (P == 2)
-            _mm_storeu_pd(acc, detail::sum_terms_2(t, deg));
-          else
-#endif
-            detail::sum_terms<P>(t, deg, acc);
-          for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
-            const double* a = anc + std::size_t(aid[e]) * P;
-            double* w = &aw_[std::size_t(e) * P];
-            double dz[P];
-            for (int c = 0; c < P; ++c) dz[c] = xv[c] - a[c];
-            for (int c = 0; c < P; ++c) acc[c] += dz[c] - w[c];
-            for (int c = 0; c < P; ++c) w[c] = keep * w[c] + invL * dz[c];
-            project_sphere<P>(ar[e], w);
-          }
-          double* xo = xn + std::size_t(v) * P;
-          for (int c = 0; c < P; ++c) {
-            xo[c] = xv[c] - invL * acc[c];
-            const double q = xo[c] - xv[c];
-            dd += q * q;
-            ss += xo[c] * xo[c];
-          }
-        },
-        P);
-    sums[0] = dd;
-    sums[1] = ss;
-  }
-
-  template <int P>
-  void iterate_impl() {
-    HaloPlan& halo = prob_.graph().halo();
-    const LocalId n_int = prob_.graph().num_interior(), n_owned = prob_.num_owned();
-    double sums[2] = {0, 0};
-    halo.begin(x_.data(), P);
-    update<P>(0, n_int, sums);
-    halo.end(x_.data(), P);
-    update<P>(n_int, n_owned, sums);
-    diff_sq_ = sums[0];
-    x_sq_ = sums[1];
-    std::swap(x_, xn_);
   }
 
   // F(z) = 1/2 sum ||x_i - x_j - y_e||^2 + 1/2 sum ||x_i - a_k - w_ik||^2 (000, eq. 2).
@@ -383,7 +263,7 @@ class MM final : public Algorithm {
         if (gr.global_id(u) < gv) continue;
         double s = 0;
         for (int c = 0; c < P; ++c) {
-          const double r = x_[std::size_t(v) * P + c] - x_[std::size_t(u) * P + c] - y_[std::size_t(e) * P + c];
+          const double r = x_[std::size_t(v) * P + c] - x_[std::size_t(u) * P + c] - y_[lanes_.at(v, e - off[v], P, c)];
           s += r * r;
         }
         F += 0.5 * s;
@@ -405,9 +285,9 @@ class MM final : public Algorithm {
 
   LocalizationProblem& prob_;
   double L_;
-  std::vector<double> x_, xn_, y_, aw_;
-  std::vector<std::uint8_t> fwd_;
-  detail::SlotBlock blk_;
+  std::vector<double> x_, xn_, y_, aw_;  // y_: edge variables in the lane layout (NodeLanes::at)
+  detail::NodeLanes lanes_;
+  double norms_[2 * 8];  // per lane: ||x(t+1) - x(t)||^2, ||x(t+1)||^2
   double diff_sq_ = 0, x_sq_ = 0;
 };
 

@@ -393,7 +393,7 @@ int run_solve(const SolveCommand& cmd, MPI_Comm comm) {
     for (const auto& ph : s.phase_iterate_seconds) j.add(ph.first + "_iterate_seconds", ph.second);
     for (const auto& ph : s.phase_traffic_bytes)
       if (std::isfinite(ph.second)) j.add(ph.first + "_traffic_bytes_per_iteration", ph.second);
-    j.add("simd", detail::simd_enabled() ? "avx2" : "none");
+    j.add("simd", detail::simd_name());
     for (const auto& ph : rep.setup_phases) j.add("setup_" + ph.first + "_seconds", ph.second);
     if (s.errors.valid) {
       j.add("rmse", s.errors.rmse).add("mpe", s.errors.mpe);

@@ -1,5 +1,6 @@
 #include "kernels.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -13,18 +14,27 @@ namespace snl::detail {
 
 namespace {
 
-bool detect_simd() {
-  const char* env = std::getenv("SNL_SIMD");
-  if (env && std::strcmp(env, "0") == 0) return false;
+// SIMD levels: 0 scalar, 1 AVX2 (4 lanes), 2 AVX-512F/DQ (8 lanes).
+int cpu_level() {
 #ifdef SNL_HAVE_AVX2_PATH
   __builtin_cpu_init();
-  return __builtin_cpu_supports("avx2");
-#else
-  return false;
+  if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq")) return 2;
+  if (__builtin_cpu_supports("avx2")) return 1;
 #endif
+  return 0;
 }
 
-bool g_simd = detect_simd();
+// SNL_SIMD=0 (or scalar) selects the scalar kernels, SNL_SIMD=avx2 the AVX2
+// ones even where AVX-512 is there (for comparisons); unset: the best.
+const char* simd_env() {
+  const char* env = std::getenv("SNL_SIMD");
+  return env ? env : "";
+}
+const int g_cpu = cpu_level();
+const int g_lanes = (g_cpu == 2 && std::strcmp(simd_env(), "avx2") != 0) ? 8 : 4;
+// The best level the lane width allows (8 lanes: AVX-512, 4 lanes: AVX2).
+const int g_top = std::min(g_cpu, g_lanes == 8 ? 2 : 1);
+int g_level = (std::strcmp(simd_env(), "0") == 0 || std::strcmp(simd_env(), "scalar") == 0) ? 0 : g_top;
 
 // ---- scalar terms (the portable path and the reference for the SIMD one) ----
 
@@ -60,31 +70,96 @@ inline void mm_term(const double* xv, const double* xu, bool fwd, double rho, do
   for (int c = 0; c < P; ++c) dz[c] = xi[c] - xj[c];
   for (int c = 0; c < P; ++c) t[c] = sgn * (dz[c] - y[c]);
   for (int c = 0; c < P; ++c) yn[c] = keep * y[c] + invL * dz[c];
-  double s = 0;
-  for (int c = 0; c < P; ++c) s += yn[c] * yn[c];
-  const double nv = std::sqrt(s);
-  if (nv > 0) {
-    const double f = rho / nv;
-    for (int c = 0; c < P; ++c) y[c] = yn[c] * f;
-  } else {  // P_sphere(0) = rho e_1
-    y[0] = rho;
-    for (int c = 1; c < P; ++c) y[c] = 0;
+  project_sphere<P>(rho, yn);
+  for (int c = 0; c < P; ++c) y[c] = yn[c];
+}
+
+inline int lane_of_node(int q, int C) { return NodeLanes::lane_of_node(q, C); }
+
+// The node-lane relaxation step, one node at a time: the reference for the
+// SIMD versions (and the path for p = 3, for partial chunks and CPUs without
+// AVX2). Padding slots are skipped: the SIMD lanes add +0.0 there, which
+// changes no sum (a sum that starts at +0.0 is never -0.0).
+template <int P>
+void relax_chunk_scalar(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c, const RelaxStep& s) {
+  const int C = nl.lanes;
+  const std::int64_t g0 = nl.group_off[c], g1 = nl.group_off[c + 1];
+  const std::int64_t* aoff = prob.anchor_offsets().data();
+  for (int q = 0; q < nl.count[c]; ++q) {
+    const LocalId v = nl.first[c] + q;
+    const std::size_t i0 = std::size_t(v) * P;
+    const int L = lane_of_node(q, C);
+    double acc[P] = {}, t[P];
+    for (std::int64_t g = g0; g < g1; ++g) {
+      if (!((nl.real[g] >> L) & 1)) continue;
+      disk_term<P>(s.w + i0, s.w + std::size_t(nl.adj[g * C + q]) * P, nl.rho[g * C + L], t);
+      for (int k = 0; k < P; ++k) acc[k] += t[k];
+    }
+    if (aoff[v] != aoff[v + 1]) add_anchor_disk_terms(prob, v, s.w + i0, acc);
+    for (int k = 0; k < P; ++k) {
+      const double now = s.w[i0 + k] - acc[k] / s.L, d = now - s.x[i0 + k];
+      s.xn[i0 + k] = now;
+      s.wn[i0 + k] = now + s.beta * d;
+      s.norms[q] += d * d;
+      s.norms[C + q] += now * now;
+      s.norms[2 * C + q] += acc[k] * acc[k];
+    }
   }
 }
 
+// MM anchor terms of owned node v (000, eqs. 11 and 13): acc += dz - w_k,
+// w_k <- P_sphere(keep w_k + invL dz) with dz = x_v - a_k, in anchor-id order.
 template <int P>
-void disk_terms_scalar(const LocalId* src, const LocalId* adj, const double* rho, const double* x, std::int64_t n,
-                       double* t) {
-  for (std::int64_t k = 0; k < n; ++k)
-    disk_term<P>(x + std::size_t(src[k]) * P, x + std::size_t(adj[k]) * P, rho[k], t + P * k);
+void add_anchor_mm_terms(const LocalizationProblem& prob, LocalId v, const double* xv, double keep, double invL,
+                         double* aw, double* acc) {
+  const auto& aoff = prob.anchor_offsets();
+  const auto& aid = prob.anchor_ids();
+  const auto& ar = prob.anchor_ranges();
+  const double* anc = prob.anchors().data();
+  for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
+    const double* a = anc + std::size_t(aid[e]) * P;
+    double* w = aw + std::size_t(e) * P;
+    double dz[P];
+    for (int c = 0; c < P; ++c) dz[c] = xv[c] - a[c];
+    for (int c = 0; c < P; ++c) acc[c] += dz[c] - w[c];
+    for (int c = 0; c < P; ++c) w[c] = keep * w[c] + invL * dz[c];
+    project_sphere<P>(ar[e], w);
+  }
 }
 
+// The node-lane MM step, one node at a time (reference twin of the SIMD
+// versions; the path for p = 3 and partial chunks). Padding slots are
+// skipped, which is what the SIMD lanes' masked adds amount to.
 template <int P>
-void mm_terms_scalar(const LocalId* src, const LocalId* adj, const std::uint8_t* fwd, const double* rho,
-                     const double* x, double keep, double invL, std::int64_t n, double* y, double* t) {
-  for (std::int64_t k = 0; k < n; ++k)
-    mm_term<P>(x + std::size_t(src[k]) * P, x + std::size_t(adj[k]) * P, fwd[k] != 0, rho[k], keep, invL, y + P * k,
-               t + P * k);
+void mm_chunk_scalar(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c, const MMStep& s) {
+  const int C = nl.lanes;
+  const std::int64_t g0 = nl.group_off[c], g1 = nl.group_off[c + 1];
+  const std::int64_t* aoff = prob.anchor_offsets().data();
+  for (int q = 0; q < nl.count[c]; ++q) {
+    const LocalId v = nl.first[c] + q;
+    const double* xv = s.x + std::size_t(v) * P;
+    const int L = lane_of_node(q, C);
+    double acc[P] = {}, t[P], y[P];
+    for (std::int64_t g = g0; g < g1; ++g) {
+      if (!((nl.real[g] >> L) & 1)) continue;
+      double* yg = s.y + std::size_t(g * P) * C + L;
+      for (int k = 0; k < P; ++k) y[k] = yg[k * C];
+      mm_term<P>(xv, s.x + std::size_t(nl.adj[g * C + q]) * P, (nl.fwd[g] >> L) & 1, nl.rho[g * C + L], s.keep,
+                 s.invL, y, t);
+      for (int k = 0; k < P; ++k) {
+        yg[k * C] = y[k];
+        acc[k] += t[k];
+      }
+    }
+    if (aoff[v] != aoff[v + 1]) add_anchor_mm_terms<P>(prob, v, xv, s.keep, s.invL, s.aw, acc);
+    double* xo = s.xn + std::size_t(v) * P;
+    for (int k = 0; k < P; ++k) {
+      xo[k] = xv[k] - s.invL * acc[k];
+      const double d = xo[k] - xv[k];
+      s.norms[q] += d * d;
+      s.norms[C + q] += xo[k] * xo[k];
+    }
+  }
 }
 
 #ifdef SNL_HAVE_AVX2_PATH
@@ -117,78 +192,273 @@ SNL_AVX2 inline void store_pairs(double* t, __m256d X, __m256d Y) {
   _mm256_storeu_pd(t + 4, _mm256_unpackhi_pd(X, Y));  // (x2, y2, x3, y3)
 }
 
-SNL_AVX2 void disk_terms_avx2(const LocalId* src, const LocalId* adj, const double* rho, const double* x,
-                              std::int64_t n, double* t) {
-  const __m256d one = _mm256_set1_pd(1.0);
-  std::int64_t k = 0;
-  for (; k + 4 <= n; k += 4) {
-    __m256d VX, VY, UX, UY;
-    load_rows(x, src + k, &VX, &VY);
-    load_rows(x, adj + k, &UX, &UY);
-    const __m256d r = load_scalars_0213(rho + k);
-    const __m256d z0 = _mm256_sub_pd(VX, UX), z1 = _mm256_sub_pd(VY, UY);
-    const __m256d s = _mm256_add_pd(_mm256_mul_pd(z0, z0), _mm256_mul_pd(z1, z1));
-    const __m256d nz = _mm256_sqrt_pd(s);
-    const __m256d mask = _mm256_cmp_pd(nz, r, _CMP_GT_OQ);
-    const __m256d c = _mm256_sub_pd(one, _mm256_div_pd(r, nz));
-    store_pairs(t + 2 * k, _mm256_and_pd(_mm256_mul_pd(c, z0), mask), _mm256_and_pd(_mm256_mul_pd(c, z1), mask));
-  }
+// Rows v .. v+3 (contiguous) as (x, y) registers in the lane order of load_rows.
+SNL_AVX2 inline void load_pairs(const double* r, __m256d* X, __m256d* Y) {
+  const __m256d a = _mm256_loadu_pd(r), b = _mm256_loadu_pd(r + 4);
+  *X = _mm256_unpacklo_pd(a, b);
+  *Y = _mm256_unpackhi_pd(a, b);
 }
 
-SNL_AVX2 void mm_terms_avx2(const LocalId* src, const LocalId* adj, const std::uint8_t* fwd, const double* rho,
-                            const double* x, double keep, double invL, std::int64_t n, double* y, double* t) {
-  const __m256d one = _mm256_set1_pd(1.0), minus_one = _mm256_set1_pd(-1.0), zero = _mm256_setzero_pd();
-  const __m256d vkeep = _mm256_set1_pd(keep), vinvL = _mm256_set1_pd(invL);
-  std::int64_t k = 0;
-  for (; k + 4 <= n; k += 4) {
-    __m256d VX, VY, UX, UY;
-    load_rows(x, src + k, &VX, &VY);
-    load_rows(x, adj + k, &UX, &UY);
-    const __m256d r = load_scalars_0213(rho + k);
-    // fwd bytes -> 64-bit lane masks in the (0, 2, 1, 3) order.
-    std::int32_t f4;
-    std::memcpy(&f4, fwd + k, 4);
-    const __m256i fw = _mm256_permute4x64_epi64(_mm256_cvtepu8_epi64(_mm_cvtsi32_si128(f4)), _MM_SHUFFLE(3, 1, 2, 0));
-    const __m256d fmask = _mm256_castsi256_pd(_mm256_cmpgt_epi64(fw, _mm256_setzero_si256()));
-    const __m256d sgn = _mm256_blendv_pd(minus_one, one, fmask);
-    // dz = x_i - x_j in the edge's orientation (computed both ways and
-    // selected, so signed zeros match the scalar form too).
-    const __m256d dz0 = _mm256_blendv_pd(_mm256_sub_pd(UX, VX), _mm256_sub_pd(VX, UX), fmask);
-    const __m256d dz1 = _mm256_blendv_pd(_mm256_sub_pd(UY, VY), _mm256_sub_pd(VY, UY), fmask);
-    __m256d YX, YY;
-    {
-      const __m256d a = _mm256_loadu_pd(y + 2 * k), b = _mm256_loadu_pd(y + 2 * k + 4);
-      YX = _mm256_unpacklo_pd(a, b);
-      YY = _mm256_unpackhi_pd(a, b);
+// Node-lane relaxation step, 4 nodes per register (full chunks only): the
+// lanes hold nodes (0, 2, 1, 3) of the chunk, the order load_rows gives.
+SNL_AVX2 void relax_chunks_avx2(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0,
+                                std::int64_t c1, const RelaxStep& s) {
+  const __m256d one = _mm256_set1_pd(1.0), vL = _mm256_set1_pd(s.L), vb = _mm256_set1_pd(s.beta);
+  const std::int64_t* aoff = prob.anchor_offsets().data();
+  __m256d DD = load_scalars_0213(s.norms), SS = load_scalars_0213(s.norms + 4), GS = load_scalars_0213(s.norms + 8);
+  for (std::int64_t c = c0; c < c1; ++c) {
+    const LocalId v0 = nl.first[c];
+    const std::size_t i0 = std::size_t(v0) * 2;
+    __m256d WX, WY;
+    load_pairs(s.w + i0, &WX, &WY);
+    __m256d AX = _mm256_setzero_pd(), AY = _mm256_setzero_pd();
+    for (std::int64_t g = nl.group_off[c]; g < nl.group_off[c + 1]; ++g) {
+      __m256d UX, UY;
+      load_rows(s.w, nl.adj.data() + 4 * g, &UX, &UY);
+      const __m256d r = _mm256_loadu_pd(nl.rho.data() + 4 * g);
+      const __m256d z0 = _mm256_sub_pd(WX, UX), z1 = _mm256_sub_pd(WY, UY);
+      const __m256d nz = _mm256_sqrt_pd(_mm256_add_pd(_mm256_mul_pd(z0, z0), _mm256_mul_pd(z1, z1)));
+      const __m256d mask = _mm256_cmp_pd(nz, r, _CMP_GT_OQ);
+      const __m256d cf = _mm256_sub_pd(one, _mm256_div_pd(r, nz));
+      AX = _mm256_add_pd(AX, _mm256_and_pd(_mm256_mul_pd(cf, z0), mask));
+      AY = _mm256_add_pd(AY, _mm256_and_pd(_mm256_mul_pd(cf, z1), mask));
     }
-    store_pairs(t + 2 * k, _mm256_mul_pd(sgn, _mm256_sub_pd(dz0, YX)), _mm256_mul_pd(sgn, _mm256_sub_pd(dz1, YY)));
-    __m256d y0 = _mm256_add_pd(_mm256_mul_pd(vkeep, YX), _mm256_mul_pd(vinvL, dz0));
-    __m256d y1 = _mm256_add_pd(_mm256_mul_pd(vkeep, YY), _mm256_mul_pd(vinvL, dz1));
-    const __m256d s = _mm256_add_pd(_mm256_mul_pd(y0, y0), _mm256_mul_pd(y1, y1));
-    const __m256d nv = _mm256_sqrt_pd(s);
-    const __m256d pos = _mm256_cmp_pd(nv, zero, _CMP_GT_OQ);
-    const __m256d f = _mm256_div_pd(r, nv);
-    y0 = _mm256_blendv_pd(r, _mm256_mul_pd(y0, f), pos);
-    y1 = _mm256_blendv_pd(zero, _mm256_mul_pd(y1, f), pos);
-    store_pairs(y + 2 * k, y0, y1);
+    if (nl.has_anchor[c]) {  // rare at scale: through memory, one node at a time
+      alignas(32) double tmp[8];
+      store_pairs(tmp, AX, AY);
+      for (int q = 0; q < 4; ++q)
+        if (aoff[v0 + q] != aoff[v0 + q + 1]) add_anchor_disk_terms(prob, v0 + q, s.w + i0 + 2 * q, tmp + 2 * q);
+      load_pairs(tmp, &AX, &AY);
+    }
+    __m256d XX, XY;
+    load_pairs(s.x + i0, &XX, &XY);
+    const __m256d NX = _mm256_sub_pd(WX, _mm256_div_pd(AX, vL)), NY = _mm256_sub_pd(WY, _mm256_div_pd(AY, vL));
+    const __m256d DX = _mm256_sub_pd(NX, XX), DY = _mm256_sub_pd(NY, XY);
+    store_pairs(s.xn + i0, NX, NY);
+    store_pairs(s.wn + i0, _mm256_add_pd(NX, _mm256_mul_pd(vb, DX)), _mm256_add_pd(NY, _mm256_mul_pd(vb, DY)));
+    DD = _mm256_add_pd(_mm256_add_pd(DD, _mm256_mul_pd(DX, DX)), _mm256_mul_pd(DY, DY));
+    SS = _mm256_add_pd(_mm256_add_pd(SS, _mm256_mul_pd(NX, NX)), _mm256_mul_pd(NY, NY));
+    GS = _mm256_add_pd(_mm256_add_pd(GS, _mm256_mul_pd(AX, AX)), _mm256_mul_pd(AY, AY));
   }
+  // (0, 2, 1, 3) is its own inverse.
+  _mm256_storeu_pd(s.norms, _mm256_permute4x64_pd(DD, _MM_SHUFFLE(3, 1, 2, 0)));
+  _mm256_storeu_pd(s.norms + 4, _mm256_permute4x64_pd(SS, _MM_SHUFFLE(3, 1, 2, 0)));
+  _mm256_storeu_pd(s.norms + 8, _mm256_permute4x64_pd(GS, _MM_SHUFFLE(3, 1, 2, 0)));
 }
+
+// Lane bits (register order) -> 64-bit lane masks.
+SNL_AVX2 inline __m256d lane_mask4(unsigned bits) {
+  const __m256i bit = _mm256_setr_epi64x(1, 2, 4, 8);
+  return _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_and_si256(_mm256_set1_epi64x(bits), bit), bit));
+}
+
+// Node-lane MM step, 4 nodes per register (full chunks only).
+SNL_AVX2 void mm_chunks_avx2(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
+                             const MMStep& s) {
+  const __m256d one = _mm256_set1_pd(1.0), minus_one = _mm256_set1_pd(-1.0), zero = _mm256_setzero_pd();
+  const __m256d vkeep = _mm256_set1_pd(s.keep), vinvL = _mm256_set1_pd(s.invL);
+  const std::int64_t* aoff = prob.anchor_offsets().data();
+  __m256d DD = load_scalars_0213(s.norms), SS = load_scalars_0213(s.norms + 4);
+  for (std::int64_t c = c0; c < c1; ++c) {
+    const LocalId v0 = nl.first[c];
+    const std::size_t i0 = std::size_t(v0) * 2;
+    __m256d VX, VY;
+    load_pairs(s.x + i0, &VX, &VY);
+    __m256d AX = _mm256_setzero_pd(), AY = _mm256_setzero_pd();
+    for (std::int64_t g = nl.group_off[c]; g < nl.group_off[c + 1]; ++g) {
+      __m256d UX, UY;
+      load_rows(s.x, nl.adj.data() + 4 * g, &UX, &UY);
+      const __m256d r = _mm256_loadu_pd(nl.rho.data() + 4 * g);
+      const __m256d re = lane_mask4(nl.real[g]), fw = lane_mask4(nl.fwd[g]);
+      // dz = x_i - x_j in the edge's orientation (both differences, selected,
+      // so that signed zeros match the scalar form).
+      const __m256d dz0 = _mm256_blendv_pd(_mm256_sub_pd(UX, VX), _mm256_sub_pd(VX, UX), fw);
+      const __m256d dz1 = _mm256_blendv_pd(_mm256_sub_pd(UY, VY), _mm256_sub_pd(VY, UY), fw);
+      double* yg = s.y + 8 * g;
+      const __m256d YX = _mm256_loadu_pd(yg), YY = _mm256_loadu_pd(yg + 4);
+      const __m256d sgn = _mm256_blendv_pd(minus_one, one, fw);
+      AX = _mm256_add_pd(AX, _mm256_and_pd(_mm256_mul_pd(sgn, _mm256_sub_pd(dz0, YX)), re));
+      AY = _mm256_add_pd(AY, _mm256_and_pd(_mm256_mul_pd(sgn, _mm256_sub_pd(dz1, YY)), re));
+      const __m256d y0 = _mm256_add_pd(_mm256_mul_pd(vkeep, YX), _mm256_mul_pd(vinvL, dz0));
+      const __m256d y1 = _mm256_add_pd(_mm256_mul_pd(vkeep, YY), _mm256_mul_pd(vinvL, dz1));
+      const __m256d nv = _mm256_sqrt_pd(_mm256_add_pd(_mm256_mul_pd(y0, y0), _mm256_mul_pd(y1, y1)));
+      const __m256d pos = _mm256_cmp_pd(nv, zero, _CMP_GT_OQ);
+      const __m256d f = _mm256_div_pd(r, nv);
+      _mm256_storeu_pd(yg, _mm256_blendv_pd(r, _mm256_mul_pd(y0, f), pos));
+      _mm256_storeu_pd(yg + 4, _mm256_blendv_pd(zero, _mm256_mul_pd(y1, f), pos));
+    }
+    if (nl.has_anchor[c]) {
+      alignas(32) double tmp[8];
+      store_pairs(tmp, AX, AY);
+      for (int q = 0; q < 4; ++q)
+        if (aoff[v0 + q] != aoff[v0 + q + 1])
+          add_anchor_mm_terms<2>(prob, v0 + q, s.x + i0 + 2 * q, s.keep, s.invL, s.aw, tmp + 2 * q);
+      load_pairs(tmp, &AX, &AY);
+    }
+    const __m256d XX = _mm256_sub_pd(VX, _mm256_mul_pd(vinvL, AX)), XY = _mm256_sub_pd(VY, _mm256_mul_pd(vinvL, AY));
+    const __m256d DX = _mm256_sub_pd(XX, VX), DY = _mm256_sub_pd(XY, VY);
+    store_pairs(s.xn + i0, XX, XY);
+    DD = _mm256_add_pd(_mm256_add_pd(DD, _mm256_mul_pd(DX, DX)), _mm256_mul_pd(DY, DY));
+    SS = _mm256_add_pd(_mm256_add_pd(SS, _mm256_mul_pd(XX, XX)), _mm256_mul_pd(XY, XY));
+  }
+  _mm256_storeu_pd(s.norms, _mm256_permute4x64_pd(DD, _MM_SHUFFLE(3, 1, 2, 0)));
+  _mm256_storeu_pd(s.norms + 4, _mm256_permute4x64_pd(SS, _MM_SHUFFLE(3, 1, 2, 0)));
+}
+
+// ---- AVX-512: the same node-lane step with 8 nodes per register. Lanes
+// hold nodes (0, 4, 1, 5, 2, 6, 3, 7) of the chunk (NodeLanes::lane_node).
+// A lane whose slot is inside its disk is left as it is by a masked add,
+// which is the scalar form's "+ (+0.0)" (the sum is never -0.0).
+#define SNL_AVX512 __attribute__((target("avx512f,avx512dq")))
+// GCC 12 warns about the intrinsics headers' own deliberately undefined
+// registers (_mm512_undefined_pd) once they are inlined here.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wuninitialized"
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+
+SNL_AVX512 inline void load_rows8(const double* x, const LocalId* idx, __m512d* X, __m512d* Y) {
+  auto row = [&](int q) { return _mm_loadu_pd(x + std::size_t(idx[q]) * 2); };
+  __m512d a = _mm512_castpd128_pd512(row(0)), b = _mm512_castpd128_pd512(row(4));
+  a = _mm512_insertf64x2(a, row(1), 1);
+  b = _mm512_insertf64x2(b, row(5), 1);
+  a = _mm512_insertf64x2(a, row(2), 2);
+  b = _mm512_insertf64x2(b, row(6), 2);
+  a = _mm512_insertf64x2(a, row(3), 3);
+  b = _mm512_insertf64x2(b, row(7), 3);
+  *X = _mm512_unpacklo_pd(a, b);
+  *Y = _mm512_unpackhi_pd(a, b);
+}
+
+SNL_AVX512 inline void load_pairs8(const double* r, __m512d* X, __m512d* Y) {
+  const __m512d a = _mm512_loadu_pd(r), b = _mm512_loadu_pd(r + 8);
+  *X = _mm512_unpacklo_pd(a, b);
+  *Y = _mm512_unpackhi_pd(a, b);
+}
+
+SNL_AVX512 inline void store_pairs8(double* t, __m512d X, __m512d Y) {
+  _mm512_storeu_pd(t, _mm512_unpacklo_pd(X, Y));      // nodes 0..3
+  _mm512_storeu_pd(t + 8, _mm512_unpackhi_pd(X, Y));  // nodes 4..7
+}
+
+// Lane sums <-> per-node-offset arrays.
+SNL_AVX512 inline __m512d load_lanes8(const double* q) {
+  return _mm512_permutexvar_pd(_mm512_setr_epi64(0, 4, 1, 5, 2, 6, 3, 7), _mm512_loadu_pd(q));
+}
+SNL_AVX512 inline void store_lanes8(double* q, __m512d v) {
+  _mm512_storeu_pd(q, _mm512_permutexvar_pd(_mm512_setr_epi64(0, 2, 4, 6, 1, 3, 5, 7), v));
+}
+
+SNL_AVX512 void relax_chunks_avx512(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0,
+                                    std::int64_t c1, const RelaxStep& s) {
+  const __m512d one = _mm512_set1_pd(1.0), vL = _mm512_set1_pd(s.L), vb = _mm512_set1_pd(s.beta);
+  const std::int64_t* aoff = prob.anchor_offsets().data();
+  __m512d DD = load_lanes8(s.norms), SS = load_lanes8(s.norms + 8), GS = load_lanes8(s.norms + 16);
+  for (std::int64_t c = c0; c < c1; ++c) {
+    const LocalId v0 = nl.first[c];
+    const std::size_t i0 = std::size_t(v0) * 2;
+    __m512d WX, WY;
+    load_pairs8(s.w + i0, &WX, &WY);
+    __m512d AX = _mm512_setzero_pd(), AY = _mm512_setzero_pd();
+    for (std::int64_t g = nl.group_off[c]; g < nl.group_off[c + 1]; ++g) {
+      __m512d UX, UY;
+      load_rows8(s.w, nl.adj.data() + 8 * g, &UX, &UY);
+      const __m512d r = _mm512_loadu_pd(nl.rho.data() + 8 * g);
+      const __m512d z0 = _mm512_sub_pd(WX, UX), z1 = _mm512_sub_pd(WY, UY);
+      const __m512d nz = _mm512_sqrt_pd(_mm512_add_pd(_mm512_mul_pd(z0, z0), _mm512_mul_pd(z1, z1)));
+      const __mmask8 out = _mm512_cmp_pd_mask(nz, r, _CMP_GT_OQ);
+      const __m512d cf = _mm512_sub_pd(one, _mm512_div_pd(r, nz));
+      AX = _mm512_mask_add_pd(AX, out, AX, _mm512_mul_pd(cf, z0));
+      AY = _mm512_mask_add_pd(AY, out, AY, _mm512_mul_pd(cf, z1));
+    }
+    if (nl.has_anchor[c]) {
+      alignas(64) double tmp[16];
+      store_pairs8(tmp, AX, AY);
+      for (int q = 0; q < 8; ++q)
+        if (aoff[v0 + q] != aoff[v0 + q + 1]) add_anchor_disk_terms(prob, v0 + q, s.w + i0 + 2 * q, tmp + 2 * q);
+      load_pairs8(tmp, &AX, &AY);
+    }
+    __m512d XX, XY;
+    load_pairs8(s.x + i0, &XX, &XY);
+    const __m512d NX = _mm512_sub_pd(WX, _mm512_div_pd(AX, vL)), NY = _mm512_sub_pd(WY, _mm512_div_pd(AY, vL));
+    const __m512d DX = _mm512_sub_pd(NX, XX), DY = _mm512_sub_pd(NY, XY);
+    store_pairs8(s.xn + i0, NX, NY);
+    store_pairs8(s.wn + i0, _mm512_add_pd(NX, _mm512_mul_pd(vb, DX)), _mm512_add_pd(NY, _mm512_mul_pd(vb, DY)));
+    DD = _mm512_add_pd(_mm512_add_pd(DD, _mm512_mul_pd(DX, DX)), _mm512_mul_pd(DY, DY));
+    SS = _mm512_add_pd(_mm512_add_pd(SS, _mm512_mul_pd(NX, NX)), _mm512_mul_pd(NY, NY));
+    GS = _mm512_add_pd(_mm512_add_pd(GS, _mm512_mul_pd(AX, AX)), _mm512_mul_pd(AY, AY));
+  }
+  store_lanes8(s.norms, DD);
+  store_lanes8(s.norms + 8, SS);
+  store_lanes8(s.norms + 16, GS);
+}
+
+SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0,
+                                 std::int64_t c1, const MMStep& s) {
+  const __m512d minus_one = _mm512_set1_pd(-1.0), zero = _mm512_setzero_pd();
+  const __m512d vkeep = _mm512_set1_pd(s.keep), vinvL = _mm512_set1_pd(s.invL);
+  const std::int64_t* aoff = prob.anchor_offsets().data();
+  __m512d DD = load_lanes8(s.norms), SS = load_lanes8(s.norms + 8);
+  for (std::int64_t c = c0; c < c1; ++c) {
+    const LocalId v0 = nl.first[c];
+    const std::size_t i0 = std::size_t(v0) * 2;
+    __m512d VX, VY;
+    load_pairs8(s.x + i0, &VX, &VY);
+    __m512d AX = _mm512_setzero_pd(), AY = _mm512_setzero_pd();
+    for (std::int64_t g = nl.group_off[c]; g < nl.group_off[c + 1]; ++g) {
+      __m512d UX, UY;
+      load_rows8(s.x, nl.adj.data() + 8 * g, &UX, &UY);
+      const __m512d r = _mm512_loadu_pd(nl.rho.data() + 8 * g);
+      const __mmask8 re = nl.real[g], fw = nl.fwd[g], bw = static_cast<__mmask8>(~fw);
+      const __m512d dz0 = _mm512_mask_sub_pd(_mm512_sub_pd(UX, VX), fw, VX, UX);
+      const __m512d dz1 = _mm512_mask_sub_pd(_mm512_sub_pd(UY, VY), fw, VY, UY);
+      double* yg = s.y + 16 * g;
+      const __m512d YX = _mm512_loadu_pd(yg), YY = _mm512_loadu_pd(yg + 8);
+      __m512d t0 = _mm512_sub_pd(dz0, YX), t1 = _mm512_sub_pd(dz1, YY);
+      t0 = _mm512_mask_mul_pd(t0, bw, t0, minus_one);  // sgn (dz - y): 1.0 * t is t
+      t1 = _mm512_mask_mul_pd(t1, bw, t1, minus_one);
+      AX = _mm512_mask_add_pd(AX, re, AX, t0);
+      AY = _mm512_mask_add_pd(AY, re, AY, t1);
+      const __m512d y0 = _mm512_add_pd(_mm512_mul_pd(vkeep, YX), _mm512_mul_pd(vinvL, dz0));
+      const __m512d y1 = _mm512_add_pd(_mm512_mul_pd(vkeep, YY), _mm512_mul_pd(vinvL, dz1));
+      const __m512d nv = _mm512_sqrt_pd(_mm512_add_pd(_mm512_mul_pd(y0, y0), _mm512_mul_pd(y1, y1)));
+      const __mmask8 pos = _mm512_cmp_pd_mask(nv, zero, _CMP_GT_OQ);
+      const __m512d f = _mm512_div_pd(r, nv);
+      _mm512_storeu_pd(yg, _mm512_mask_mul_pd(r, pos, y0, f));
+      _mm512_storeu_pd(yg + 8, _mm512_mask_mul_pd(zero, pos, y1, f));
+    }
+    if (nl.has_anchor[c]) {
+      alignas(64) double tmp[16];
+      store_pairs8(tmp, AX, AY);
+      for (int q = 0; q < 8; ++q)
+        if (aoff[v0 + q] != aoff[v0 + q + 1])
+          add_anchor_mm_terms<2>(prob, v0 + q, s.x + i0 + 2 * q, s.keep, s.invL, s.aw, tmp + 2 * q);
+      load_pairs8(tmp, &AX, &AY);
+    }
+    const __m512d XX = _mm512_sub_pd(VX, _mm512_mul_pd(vinvL, AX)), XY = _mm512_sub_pd(VY, _mm512_mul_pd(vinvL, AY));
+    const __m512d DX = _mm512_sub_pd(XX, VX), DY = _mm512_sub_pd(XY, VY);
+    store_pairs8(s.xn + i0, XX, XY);
+    DD = _mm512_add_pd(_mm512_add_pd(DD, _mm512_mul_pd(DX, DX)), _mm512_mul_pd(DY, DY));
+    SS = _mm512_add_pd(_mm512_add_pd(SS, _mm512_mul_pd(XX, XX)), _mm512_mul_pd(XY, XY));
+  }
+  store_lanes8(s.norms, DD);
+  store_lanes8(s.norms + 8, SS);
+}
+#pragma GCC diagnostic pop
 #endif
 
 }  // namespace
 
-bool simd_enabled() { return g_simd; }
+bool simd_enabled() { return g_level > 0; }
 
 bool set_simd_enabled(bool on) {
-  const bool old = g_simd;
-#ifdef SNL_HAVE_AVX2_PATH
-  g_simd = on && __builtin_cpu_supports("avx2");
-#else
-  (void)on;
-  g_simd = false;
-#endif
+  const bool old = g_level > 0;
+  g_level = on ? g_top : 0;
   return old;
 }
+
+int node_lanes() { return g_lanes; }
+
+const char* simd_name() { return g_level == 2 ? "avx512" : g_level == 1 ? "avx2" : "scalar"; }
 
 void add_anchor_disk_terms(const LocalizationProblem& prob, LocalId v, const double* xv, double* acc) {
   const int p = prob.dim();
@@ -207,30 +477,117 @@ void add_anchor_disk_terms(const LocalizationProblem& prob, LocalId v, const dou
   }
 }
 
-void disk_terms(int p, const LocalId* src, const LocalId* adj, const double* rho, const double* x, std::int64_t n,
-                double* t) {
-  if (p == 3) return disk_terms_scalar<3>(src, adj, rho, x, n, t);
-#ifdef SNL_HAVE_AVX2_PATH
-  if (g_simd) {
-    const std::int64_t k = n & ~std::int64_t(3);
-    disk_terms_avx2(src, adj, rho, x, k, t);
-    return disk_terms_scalar<2>(src + k, adj + k, rho + k, x, n - k, t + 2 * k);
-  }
-#endif
-  disk_terms_scalar<2>(src, adj, rho, x, n, t);
+std::int64_t NodeLanes::bytes() const {
+  return static_cast<std::int64_t>(first.capacity() * sizeof(LocalId) + count.capacity() + has_anchor.capacity() +
+                                   group_off.capacity() * sizeof(std::int64_t) + adj.capacity() * sizeof(LocalId) +
+                                   rho.capacity() * sizeof(double) + real.capacity() + fwd.capacity());
 }
 
-void mm_terms(int p, const LocalId* src, const LocalId* adj, const std::uint8_t* fwd, const double* rho,
-              const double* x, double keep, double invL, std::int64_t n, double* y, double* t) {
-  if (p == 3) return mm_terms_scalar<3>(src, adj, fwd, rho, x, keep, invL, n, y, t);
-#ifdef SNL_HAVE_AVX2_PATH
-  if (g_simd) {
-    const std::int64_t k = n & ~std::int64_t(3);
-    mm_terms_avx2(src, adj, fwd, rho, x, keep, invL, k, y, t);
-    return mm_terms_scalar<2>(src + k, adj + k, fwd + k, rho + k, x, keep, invL, n - k, y + 2 * k, t + 2 * k);
-  }
-#endif
-  mm_terms_scalar<2>(src, adj, fwd, rho, x, keep, invL, n, y, t);
+void NodeLanes::build(const LocalizationProblem& prob) {
+  const DistGraph& gr = prob.graph();
+  const auto& off = gr.offsets();
+  const auto& aoff = prob.anchor_offsets();
+  const LocalId n_int = gr.num_interior(), n_owned = gr.num_owned();
+  const int C = lanes = node_lanes();
+  auto deg = [&](LocalId v) { return off[v + 1] - off[v]; };
+  // Two passes (widths, then fill) so that every array is allocated once, at its size.
+  std::int64_t chunks = 0, groups = 0;
+  auto each_chunk = [&](auto&& f) {
+    for (auto [b, e] : {std::pair<LocalId, LocalId>{0, n_int}, {n_int, n_owned}}) {
+      if (b == n_int) split = chunks;
+      for (LocalId v0 = b; v0 < e; v0 += C) {
+        const int cnt = static_cast<int>(std::min<LocalId>(C, e - v0));
+        std::int64_t width = 0;
+        for (int q = 0; q < cnt; ++q) width = std::max(width, deg(v0 + q));
+        f(v0, cnt, width);
+      }
+    }
+  };
+  each_chunk([&](LocalId, int, std::int64_t width) {
+    ++chunks;
+    groups += width;
+  });
+  first.assign(std::size_t(chunks), 0);
+  count.assign(std::size_t(chunks), 0);
+  has_anchor.assign(std::size_t(chunks), 0);
+  group_off.assign(std::size_t(chunks) + 1, 0);
+  adj.assign(std::size_t(groups) * C, 0);
+  rho.assign(std::size_t(groups) * C, 1.0);
+  real.assign(std::size_t(groups), 0);
+  fwd.assign(std::size_t(groups), 0);
+  n_interior = n_int;
+  std::int64_t c = 0;
+  chunks = 0;  // each_chunk counts again for split
+  each_chunk([&](LocalId v0, int cnt, std::int64_t width) {
+    ++chunks;
+    first[c] = v0;
+    count[c] = static_cast<std::uint8_t>(cnt);
+    const std::int64_t g0 = group_off[c];
+    group_off[c + 1] = g0 + width;
+    for (int q = 0; q < cnt; ++q) {
+      const LocalId v = v0 + q;
+      has_anchor[c] |= aoff[v] != aoff[v + 1];
+      for (std::int64_t g = 0; g < width; ++g) {
+        const std::size_t at = std::size_t(g0 + g) * C;
+        const int L = lane_of_node(q, C);
+        if (g >= deg(v)) {  // padding: the node itself, range 1
+          adj[at + q] = v;
+          continue;
+        }
+        const LocalId u = gr.adjacency()[off[v] + g];
+        adj[at + q] = u;
+        rho[at + L] = gr.edge_values()[off[v] + g];
+        real[g0 + g] |= std::uint8_t(1u << L);
+        if (gr.global_id(v) < gr.global_id(u)) fwd[g0 + g] |= std::uint8_t(1u << L);
+      }
+    }
+    ++c;
+  });
 }
 
+void relax_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
+                  const RelaxStep& s) {
+  if (c0 >= c1) return;
+  const int p = prob.dim();
+  std::int64_t full = c1;  // only the last chunk of a part can be partial
+  if (nl.count[c1 - 1] != nl.lanes) --full;
+#ifdef SNL_HAVE_AVX2_PATH
+  if (p == 2 && g_level == 2 && nl.lanes == 8) {
+    relax_chunks_avx512(prob, nl, c0, full, s);
+    c0 = full;
+  } else if (p == 2 && g_level >= 1 && nl.lanes == 4) {
+    relax_chunks_avx2(prob, nl, c0, full, s);
+    c0 = full;
+  }
+#endif
+  for (std::int64_t c = c0; c < c1; ++c) {
+    if (p == 2)
+      relax_chunk_scalar<2>(prob, nl, c, s);
+    else
+      relax_chunk_scalar<3>(prob, nl, c, s);
+  }
+}
+
+void mm_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
+               const MMStep& s) {
+  if (c0 >= c1) return;
+  const int p = prob.dim();
+  std::int64_t full = c1;
+  if (nl.count[c1 - 1] != nl.lanes) --full;
+#ifdef SNL_HAVE_AVX2_PATH
+  if (p == 2 && g_level == 2 && nl.lanes == 8) {
+    mm_chunks_avx512(prob, nl, c0, full, s);
+    c0 = full;
+  } else if (p == 2 && g_level >= 1 && nl.lanes == 4) {
+    mm_chunks_avx2(prob, nl, c0, full, s);
+    c0 = full;
+  }
+#endif
+  for (std::int64_t c = c0; c < c1; ++c) {
+    if (p == 2)
+      mm_chunk_scalar<2>(prob, nl, c, s);
+    else
+      mm_chunk_scalar<3>(prob, nl, c, s);
+  }
+}
 }  // namespace snl::detail

@@ -1,152 +1,127 @@
 #pragma once
-// Edge kernels of the synchronous methods (internal header).
+// Node kernels of the synchronous methods (internal header).
 //
 // A node's update sums one term per incident edge in global-id order (so
-// results do not depend on the number of ranks). The expensive part of a term
-// is a sqrt and a division, which do not depend on the order; only the sum
-// does. So the owned nodes are processed in blocks: first every slot (directed
-// edge) of the block gets its term, in SIMD where the CPU has AVX2 (4 slots at a
-// time, IEEE sqrt/div/mul/add and no FMA, so each term is bit-identical to the
-// scalar one); then each node adds its terms in slot order, exactly as the
-// plain loop did. The scalar term functions are kept as the portable path and
-// as the twin the tests compare the SIMD path against.
+// results do not depend on the number of ranks). The owned nodes are taken C
+// at a time, one per SIMD lane (C = 8 with AVX-512, 4 with AVX2; NodeLanes),
+// and each lane adds its own node's terms in that order: IEEE
+// add/sub/mul/div/sqrt and no FMA, so every lane equals the scalar twin bit
+// for bit. The scalar twins are the portable path (and the one for p = 3)
+// and what the tests compare the SIMD paths against. docs/performance.md has
+// the measurements behind this layout.
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <vector>
-#ifdef __SSE2__
-#include <emmintrin.h>
-#endif
 
 #include "snl/problem.hpp"
 
 namespace snl::detail {
 
-/// True when the AVX2 term functions are used: the CPU has AVX2 and the
+/// v <- P_sphere(rho)(v) = rho v / |v|, and rho e_1 for v = 0 (spec convention).
+template <int P>
+inline void project_sphere(double rho, double* v) {
+  double s = 0;
+  for (int c = 0; c < P; ++c) s += v[c] * v[c];
+  const double nv = std::sqrt(s);
+  if (nv > 0) {
+    const double f = rho / nv;
+    for (int c = 0; c < P; ++c) v[c] *= f;
+  } else {
+    v[0] = rho;
+    for (int c = 1; c < P; ++c) v[c] = 0;
+  }
+}
+
+/// True when the SIMD kernels are used: the CPU has AVX2 (or AVX-512) and the
 /// environment does not say SNL_SIMD=0 (read once).
 bool simd_enabled();
 /// Forces the path (tests compare the two); returns the previous setting.
 bool set_simd_enabled(bool on);
 
-/// Disk residual e(x_v - x_u, rho) = max(0, 1 - rho/|z|) z (003, eq. 9/Alg. 1
-/// step 7) for n slots: owner src[k], neighbour adj[k], range rho[k]; rows of
-/// p = 2 or 3 coordinates in x; terms written to t[p k .. p k + p). SIMD for p = 2.
-void disk_terms(int p, const LocalId* src, const LocalId* adj, const double* rho, const double* x, std::int64_t n,
-                double* t);
-
-/// MM slot update (000, eqs. 11-12) for n slots: with dz = x_i - x_j in the
-/// edge's global orientation (fwd[k] != 0: i = owner, j = neighbour), the
-/// x-step term sgn (dz - y) goes to t, and y <- P_sphere(rho)(keep y + invL dz)
-/// in place (P_sphere(0) = rho e_1).
-void mm_terms(int p, const LocalId* src, const LocalId* adj, const std::uint8_t* fwd, const double* rho,
-              const double* x, double keep, double invL, std::int64_t n, double* y, double* t);
-
 /// Anchor terms e(x_v - a_k, r_vk) of owned node v added to acc in anchor-id
 /// order (scalar: a node has few).
 void add_anchor_disk_terms(const LocalizationProblem& prob, LocalId v, const double* xv, double* acc);
 
-/// Scratch of the block loop: owners and terms of up to `capacity` slots
-/// (plus padding read by sum_terms). Sized once: no allocation in the loop.
-struct SlotBlock {
-  static constexpr int kPad = 16;
-  std::int64_t capacity = 0;
-  std::vector<LocalId> src;
-  std::vector<double> t;
-  void reserve(std::int64_t max_degree, int p) {
-    capacity = std::max<std::int64_t>(2048, max_degree);
-    src.assign(std::size_t(capacity + kPad), 0);
-    t.assign(std::size_t(capacity + kPad) * p, 0.0);
+/// SIMD lanes of the node-lane kernels: 8 where the CPU has AVX-512F/DQ, else
+/// 4. Fixed at start-up from the CPU and SNL_SIMD (0, avx2, avx512), not by
+/// set_simd_enabled: the layout, and with it every rounding of the lane sums,
+/// is then the same on the SIMD and on the scalar path.
+int node_lanes();
+/// The instruction set the kernels use now: "avx512", "avx2" or "scalar".
+const char* simd_name();
+
+/// Owned nodes in chunks of C = lanes consecutive nodes with their slots
+/// interleaved (ELL per chunk, i.e. SELL-C-1 of Kreutzer et al. 2014): group
+/// g of a chunk holds the g-th neighbour of each of its C nodes, so that the
+/// C nodes' sums run side by side, one node per SIMD lane, each still adding
+/// its own terms in its own slot (global-id) order: the same bits as a loop
+/// over the node's slots. A chunk is padded to its largest degree with the
+/// node itself at range 1 (z = 0 is inside the disk: the term is +0.0, which
+/// changes no sum). The interior [0, num_interior) and the boundary nodes are
+/// chunked separately (the halo overlap needs the split); only the last chunk
+/// of each part can be partial.
+struct NodeLanes {
+  int lanes = 4;
+  std::int64_t split = 0;                 ///< chunks [0, split) interior, [split, size) boundary
+  std::vector<LocalId> first;             ///< chunk c: nodes [first[c], first[c] + count[c])
+  std::vector<std::uint8_t> count;
+  std::vector<std::uint8_t> has_anchor;   ///< some node of the chunk has anchor ranges
+  std::vector<std::int64_t> group_off;    ///< chunk c: groups [group_off[c], group_off[c + 1])
+  std::vector<LocalId> adj;               ///< lanes per group; entry q: neighbour of node first[c] + q
+  std::vector<double> rho;                ///< lanes per group, in register lane order (lane_node)
+  /// Per group, bit L for register lane L: the slot is real (not padding);
+  /// the slot's edge is (owner, neighbour) in global-id order (MM's orientation).
+  std::vector<std::uint8_t> real, fwd;
+  LocalId n_interior = 0;
+  /// Node offset held by register lane L after the pairwise unpack of row
+  /// loads: (0, C/2, 1, C/2 + 1, ...); lane_of_node is its inverse.
+  static int lane_node(int L, int C) { return (L & 1) ? C / 2 + L / 2 : L / 2; }
+  static int lane_of_node(int q, int C) { return q < C / 2 ? 2 * q : 2 * (q - C / 2) + 1; }
+  std::int64_t size() const { return static_cast<std::int64_t>(first.size()); }
+  std::int64_t groups() const { return group_off.empty() ? 0 : group_off.back(); }
+  /// Index of coordinate c of slot k of owned node v in a per-slot array of
+  /// P-rows in lane layout: [(group P + c) lanes + register lane].
+  std::size_t at(LocalId v, std::int64_t k, int P, int c) const {
+    const std::int64_t ch = v < n_interior ? v / lanes : split + (v - n_interior) / lanes;
+    const int L = lane_of_node(static_cast<int>(v - first[ch]), lanes);
+    return std::size_t((group_off[ch] + k) * P + c) * lanes + L;
   }
+  std::int64_t bytes() const;
+  void build(const LocalizationProblem& prob);
 };
 
-inline constexpr int kFixedTerms = 10;
-
-/// acc[c] += t[k p + c] for k = 0 .. deg-1, in that order. Degrees vary from
-/// node to node, so a loop over deg mispredicts its exit once per node; up to
-/// kFixedTerms terms are summed instead with a fixed count, the terms past deg masked
-/// to +0.0 (exact: acc starts at +0.0 and a sum that starts there is never
-/// -0.0, so adding +0.0 changes no bit).
-template <int P>
-inline void sum_terms(const double* t, int deg, double* acc) {
-  constexpr int kFixed = kFixedTerms;
-  static_assert(kFixed <= SlotBlock::kPad, "padding");
-  if (deg <= kFixed) {
-    for (int k = 0; k < kFixed; ++k) {
-      std::uint64_t mask = k < deg ? ~std::uint64_t(0) : 0;
-      asm("" : "+r"(mask));  // keep it a mask (not a jump on deg)
-      for (int c = 0; c < P; ++c) {
-        std::uint64_t bits;
-        std::memcpy(&bits, &t[k * P + c], 8);
-        bits &= mask;
-        double v;
-        std::memcpy(&v, &bits, 8);
-        acc[c] += v;
-      }
-    }
-  } else {
-    for (int k = 0; k < deg; ++k)
-      for (int c = 0; c < P; ++c) acc[c] += t[k * P + c];
-  }
-}
-
-#ifdef __SSE2__
-/// Lane masks for sum_terms_2: row d holds d all-ones pairs, then zeros.
-struct alignas(16) TermMasks {
-  std::uint64_t m[kFixedTerms + 1][kFixedTerms][2] = {};
-  constexpr TermMasks() {
-    for (int d = 0; d <= kFixedTerms; ++d)
-      for (int k = 0; k < kFixedTerms; ++k) m[d][k][0] = m[d][k][1] = k < d ? ~std::uint64_t(0) : 0;
-  }
+/// One relaxation step (003, Alg. 1 steps 7-8 and the extrapolation) on the
+/// chunks [c0, c1): per node v, g = sum of the disk residuals e(w_v - w_u,
+/// rho) over its slots, then over its anchors; x(k) = w - g/L into xn, w(k+1)
+/// = x(k) + beta (x(k) - x(k-1)) into wn. norms[0 .. 3C): per lane q (node
+/// offset in its chunk) the running sums ||x(k) - x(k-1)||^2, ||x(k)||^2, ||g||^2.
+struct RelaxStep {
+  const double* w;
+  const double* x;
+  double* xn;
+  double* wn;
+  double L, beta;
+  double* norms;
 };
-inline constexpr TermMasks kTermMasks{};
+void relax_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
+                  const RelaxStep& s);
 
-/// sum_terms for p = 2 with the pair of sums in one register (per-lane IEEE
-/// adds: the same bits as the scalar form). The masks come from a table row,
-/// so that the loop is a fixed run of load/and/add the optimiser cannot turn
-/// back into a jump on deg.
-inline __m128d sum_terms_2(const double* t, int deg) {
-  __m128d acc = _mm_setzero_pd();
-  if (deg <= kFixedTerms) {
-    const double* mk = reinterpret_cast<const double*>(kTermMasks.m[deg]);
-    for (int k = 0; k < kFixedTerms; ++k)
-      acc = _mm_add_pd(acc, _mm_and_pd(_mm_loadu_pd(t + 2 * k), _mm_load_pd(mk + 2 * k)));
-  } else {
-    for (int k = 0; k < deg; ++k) acc = _mm_add_pd(acc, _mm_loadu_pd(t + 2 * k));
-  }
-  return acc;
-}
-#endif
-
-/// Runs owned nodes [b, e) in blocks of at most blk.capacity slots: terms(v0,
-/// v1, s0, n) fills blk.t for the slots [s0, s0 + n) of nodes [v0, v1) (blk.src
-/// already holds their owners), then node(v, terms_of_v, degree) per node in order.
-template <class Terms, class Node>
-[[gnu::always_inline]] inline void for_node_blocks(const std::vector<std::int64_t>& off, LocalId b, LocalId e, SlotBlock& blk, Terms&& terms,
-                     Node&& node, int p) {
-  LocalId v0 = b;
-  while (v0 < e) {
-    LocalId v1 = v0 + 1;
-    while (v1 < e && off[v1 + 1] - off[v0] <= blk.capacity) ++v1;
-    const std::int64_t s0 = off[v0], n = off[v1] - s0;
-    // Owner of each slot without a per-node loop of varying count (its exit
-    // would mispredict once per node): each node writes its id into
-    // kFixedTerms slots from its first one, and the next node overwrites what
-    // lies past its end.
-    LocalId* src = blk.src.data();
-    for (LocalId v = v0; v < v1; ++v) {
-      LocalId* q = src + (off[v] - s0);
-      const std::int64_t d = off[v + 1] - off[v];
-      if (d <= kFixedTerms) {
-        for (int k = 0; k < kFixedTerms; ++k) q[k] = v;
-      } else {
-        for (std::int64_t k = 0; k < d; ++k) q[k] = v;
-      }
-    }
-    terms(v0, v1, s0, n);
-    for (LocalId v = v0; v < v1; ++v)
-      node(v, blk.t.data() + std::size_t(off[v] - s0) * p, static_cast<int>(off[v + 1] - off[v]));
-    v0 = v1;
-  }
-}
+/// One MM step (000, Alg. 1, eqs. 11-13) on the chunks [c0, c1): per node
+/// v, with dz = x_i - x_j in each edge's orientation, the x-step sum of sgn
+/// (dz - y_e) over its slots, then over its anchors (with their w updates),
+/// x(t+1) = x - invL sum into xn; y_e <- P_sphere(rho)(keep y_e + invL dz)
+/// in place (lane layout, NodeLanes::at; P_sphere(0) = rho e_1). norms[0 ..
+/// 2C): per lane ||x(t+1) - x(t)||^2, ||x(t+1)||^2.
+struct MMStep {
+  const double* x;
+  double* xn;
+  double* y;
+  double* aw;
+  double keep, invL;
+  double* norms;
+};
+void mm_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
+               const MMStep& s);
 
 }  // namespace snl::detail

@@ -1,160 +1,217 @@
-// The SIMD edge kernels (src/kernels.hpp) against their scalar twins, bit for
-// bit, and the block summation against a plain loop. Skips the SIMD half where
-// the CPU has no AVX2 (the scalar path is then the only one).
+// The node-lane kernels (src/kernels.hpp): the lane layout against the CSR
+// graph, the SIMD steps against their scalar twins bit for bit (awkward values
+// included), and the disk residual's boundary cases. Skips the SIMD halves
+// where the CPU has no AVX2 (the scalar path is then the only one).
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstring>
 #include <limits>
 #include <random>
+#include <set>
 #include <vector>
 
 #include "kernels.hpp"
+#include "test_networks.hpp"
 
 using namespace snl;
+using namespace snl::test;
 
 namespace {
 
-struct Slots {
-  std::vector<LocalId> src, adj;
-  std::vector<double> rho, x, y;
-  std::vector<std::uint8_t> fwd;
-};
-
-// n slots over m rows, with the awkward cases mixed in: coincident rows (z = 0),
-// |z| exactly rho, zero edge variables (the sphere projection's 0 case),
-// infinite and NaN coordinates.
-Slots make_slots(int p, std::int64_t n, LocalId m, unsigned seed) {
-  std::mt19937_64 gen(seed);
-  std::uniform_real_distribution<double> u(-1, 1);
-  Slots s;
-  s.x.resize(std::size_t(m) * p);
-  for (auto& v : s.x) v = u(gen);
-  s.x[0] = std::numeric_limits<double>::infinity();
-  s.x[std::size_t(p)] = std::numeric_limits<double>::quiet_NaN();
-  for (std::int64_t k = 0; k < n; ++k) {
-    s.src.push_back(static_cast<LocalId>(gen() % m));
-    s.adj.push_back(k % 7 == 3 ? s.src.back() : static_cast<LocalId>(gen() % m));
-    s.rho.push_back(std::abs(u(gen)));
-    s.fwd.push_back(static_cast<std::uint8_t>(gen() & 1));
-    for (int c = 0; c < p; ++c) s.y.push_back(k % 5 == 1 ? 0.0 : u(gen));
-  }
-  if (n <= 5) return s;
-  // |z| == rho exactly for one slot (z along an axis).
-  s.src[5] = 2;
-  s.adj[5] = 3;
-  for (int c = 0; c < p; ++c) s.x[3 * p + c] = s.x[2 * p + c];
-  s.x[3 * p] = s.x[2 * p] + 0.5;  // z = -0.5 e_1: a term 0 * z would be -0.0, the masked one is +0.0
-  s.rho[5] = 0.5;
-  return s;
+// Bit for bit, except that any two NaNs are equal: which operand's NaN an
+// add returns depends on the operand order, and compilers treat a + b and
+// b + a as the same.
+bool same_bits(double a, double b) { return (std::isnan(a) && std::isnan(b)) || std::memcmp(&a, &b, sizeof a) == 0; }
+bool same_bits(const std::vector<double>& a, const std::vector<double>& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    if (!same_bits(a[i], b[i])) return false;
+  return true;
 }
 
-bool same_bits(const std::vector<double>& a, const std::vector<double>& b) {
-  // memcmp on an empty vector's data() (possibly null) is undefined, hence the size test first.
-  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0);
+// 150 sensors (chunks of 4 or 8 with a partial one at the end of both the
+// interior and the boundary part: the problem runs on one rank, so it has no
+// boundary, and a second problem on a block split is not needed for the layout).
+LocalizationProblem make_problem(int dim = 2) {
+  const Network w = make_network({.n = 150, .dim = dim, .radius = 0.18, .anchor_radius = 0.25, .sigma = 0.02});
+  return LocalizationProblem(MPI_COMM_SELF, slab_of(w, MPI_COMM_SELF), PartitionMethod::kMetis, nullptr);
+}
+
+// Local rows with the awkward cases mixed in: an infinite and a NaN row, and
+// node 10 on top of its first neighbour (z = 0).
+std::vector<double> awkward_rows(const LocalizationProblem& prob, unsigned seed) {
+  std::mt19937_64 gen(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const int p = prob.dim();
+  std::vector<double> x(std::size_t(prob.num_local()) * p);
+  for (auto& v : x) v = u(gen);
+  x[0] = std::numeric_limits<double>::infinity();
+  x[std::size_t(p) * 5 + 1] = std::numeric_limits<double>::quiet_NaN();
+  const auto& off = prob.graph().offsets();
+  if (off[11] > off[10])
+    for (int c = 0; c < p; ++c) x[std::size_t(p) * prob.graph().adjacency()[off[10]] + c] = x[std::size_t(p) * 10 + c];
+  return x;
+}
+
+struct RelaxOut {
+  std::vector<double> xn, wn, norms;
+};
+
+RelaxOut relax(const LocalizationProblem& prob, const detail::NodeLanes& nl, const std::vector<double>& w,
+               const std::vector<double>& x, bool simd) {
+  RelaxOut o{std::vector<double>(w.size(), -7.0), std::vector<double>(w.size(), -7.0), std::vector<double>(24, 0.0)};
+  const bool had = detail::set_simd_enabled(simd);
+  const detail::RelaxStep st{w.data(), x.data(), o.xn.data(), o.wn.data(), 1.7, 0.6, o.norms.data()};
+  detail::relax_chunks(prob, nl, 0, nl.split, st);
+  detail::relax_chunks(prob, nl, nl.split, nl.size(), st);
+  detail::set_simd_enabled(had);
+  return o;
+}
+
+bool have_simd() {
+  const bool had = detail::set_simd_enabled(true);
+  const bool on = detail::simd_enabled();
+  detail::set_simd_enabled(had);
+  return on;
 }
 
 }  // namespace
 
-TEST(Kernels, SimdTermsEqualScalarTermsBitForBit) {
-  const bool had = detail::set_simd_enabled(true);
-  if (!detail::simd_enabled()) {
-    detail::set_simd_enabled(had);
-    GTEST_SKIP() << "no AVX2 on this CPU";
-  }
-  for (std::int64_t n : {0, 1, 3, 4, 5, 8, 37, 1001}) {
-    const Slots s = make_slots(2, n, 50, 7 + unsigned(n));
-    std::vector<double> t_simd(2 * n + 2, -1.0), t_scal(2 * n + 2, -1.0);
-    detail::set_simd_enabled(true);
-    detail::disk_terms(2, s.src.data(), s.adj.data(), s.rho.data(), s.x.data(), n, t_simd.data());
-    detail::set_simd_enabled(false);
-    detail::disk_terms(2, s.src.data(), s.adj.data(), s.rho.data(), s.x.data(), n, t_scal.data());
-    EXPECT_TRUE(same_bits(t_simd, t_scal)) << "disk terms, n = " << n;
-
-    std::vector<double> y_simd = s.y, y_scal = s.y;
-    detail::set_simd_enabled(true);
-    detail::mm_terms(2, s.src.data(), s.adj.data(), s.fwd.data(), s.rho.data(), s.x.data(), 0.9, 0.1, n,
-                     y_simd.data(), t_simd.data());
-    detail::set_simd_enabled(false);
-    detail::mm_terms(2, s.src.data(), s.adj.data(), s.fwd.data(), s.rho.data(), s.x.data(), 0.9, 0.1, n,
-                     y_scal.data(), t_scal.data());
-    EXPECT_TRUE(same_bits(t_simd, t_scal)) << "mm terms, n = " << n;
-    EXPECT_TRUE(same_bits(y_simd, y_scal)) << "mm edge variables, n = " << n;
-  }
-  detail::set_simd_enabled(had);
-}
-
-TEST(Kernels, DiskTermIsTheProjectionResidual) {
-  // e(z, rho) = max(0, 1 - rho/|z|) z: zero inside the disk, on its boundary and at z = 0.
-  const std::vector<LocalId> src = {0, 0, 0, 0}, adj = {1, 2, 3, 0};
-  const std::vector<double> x = {0, 0, 3, 4, 0.3, 0.4, 0, 1};
-  const std::vector<double> rho = {1, 1, 1, 1};
-  for (bool simd : {false, true}) {
-    const bool had = detail::set_simd_enabled(simd);
-    std::vector<double> t(8);
-    detail::disk_terms(2, src.data(), adj.data(), rho.data(), x.data(), 4, t.data());
-    EXPECT_DOUBLE_EQ(t[0], -3 * (1 - 1.0 / 5));
-    EXPECT_DOUBLE_EQ(t[1], -4 * (1 - 1.0 / 5));
-    EXPECT_EQ(t[2], 0.0);  // inside
-    EXPECT_EQ(t[3], 0.0);
-    EXPECT_EQ(t[4], 0.0);  // on the boundary
-    EXPECT_EQ(t[5], 0.0);
-    EXPECT_FALSE(std::signbit(t[5]));  // masked, not 0 * (-1)
-    EXPECT_EQ(t[6], 0.0);  // z = 0
-    EXPECT_EQ(t[7], 0.0);
-    EXPECT_FALSE(std::signbit(t[6]));
-    detail::set_simd_enabled(had);
-  }
-}
-
-TEST(Kernels, FixedCountSumEqualsThePlainLoop) {
-  std::mt19937_64 gen(3);
-  std::uniform_real_distribution<double> u(-1, 1);
-  std::vector<double> t(2 * (40 + detail::SlotBlock::kPad));
-  for (auto& v : t) v = u(gen);
-  t[0] = -0.0;  // a sum of a single -0.0 term must stay +0.0 as in the loop
-  for (int deg = 0; deg <= 40; ++deg) {
-    double plain[2] = {0, 0};
-    for (int k = 0; k < deg; ++k)
-      for (int c = 0; c < 2; ++c) plain[c] += t[2 * k + c];
-    double fixed[2] = {0, 0};
-    detail::sum_terms<2>(t.data(), deg, fixed);
-    EXPECT_EQ(0, std::memcmp(plain, fixed, sizeof plain)) << deg;
-#ifdef __SSE2__
-    double sse[2];
-    _mm_storeu_pd(sse, detail::sum_terms_2(t.data(), deg));
-    EXPECT_EQ(0, std::memcmp(plain, sse, sizeof plain)) << deg;
-#endif
-  }
-}
-
-TEST(Kernels, BlockLoopVisitsEveryNodeOnceWithItsOwnSlots) {
-  // Degrees 0 .. 30 and one node larger than a block's default capacity.
-  std::vector<std::int64_t> off = {0};
-  for (int v = 0; v < 200; ++v) off.push_back(off.back() + (v == 77 ? 3000 : (v * 7) % 31));
-  const LocalId n = 200;
-  detail::SlotBlock blk;
-  blk.reserve(3000, 1);
-  std::vector<int> seen(n, 0);
+TEST(NodeLanes, LayoutHoldsEverySlotOnceInItsOrder) {
+  const LocalizationProblem prob = make_problem();
+  detail::NodeLanes nl;
+  nl.build(prob);
+  const auto& gr = prob.graph();
+  const int C = nl.lanes;
+  ASSERT_TRUE(C == 4 || C == 8);
+  // Chunks cover the interior, then the boundary, each in node order.
   LocalId next = 0;
-  bool ok = true;
-  detail::for_node_blocks(
-      off, 0, n, blk,
-      [&](LocalId v0, LocalId v1, std::int64_t s0, std::int64_t cnt) {
-        ok = ok && s0 == off[v0] && cnt == off[v1] - off[v0];
-        for (std::int64_t k = 0; k < cnt; ++k) {
-          const LocalId v = blk.src[k];
-          ok = ok && v >= v0 && v < v1 && off[v] <= s0 + k && s0 + k < off[v + 1];
-          blk.t[k] = double(s0 + k);  // the slot's own index as its term
+  for (std::int64_t c = 0; c < nl.size(); ++c) {
+    if (c == nl.split) EXPECT_EQ(next, gr.num_interior());
+    EXPECT_EQ(nl.first[c], next);
+    EXPECT_TRUE(nl.count[c] == C || c + 1 == nl.size() || c + 1 == nl.split) << c;
+    next += nl.count[c];
+  }
+  EXPECT_EQ(next, gr.num_owned());
+  std::set<std::size_t> seen;
+  for (std::int64_t c = 0; c < nl.size(); ++c) {
+    for (int q = 0; q < nl.count[c]; ++q) {
+      const LocalId v = nl.first[c] + q;
+      const int L = detail::NodeLanes::lane_of_node(q, C);
+      EXPECT_EQ(detail::NodeLanes::lane_node(L, C), q);
+      const std::int64_t deg = gr.offsets()[v + 1] - gr.offsets()[v];
+      for (std::int64_t g = nl.group_off[c]; g < nl.group_off[c + 1]; ++g) {
+        const std::int64_t k = g - nl.group_off[c];
+        const bool real = (nl.real[g] >> L) & 1;
+        EXPECT_EQ(real, k < deg);
+        if (!real) {
+          EXPECT_EQ(nl.adj[g * C + q], v);  // padding: the node itself
+          continue;
         }
-      },
-      [&](LocalId v, const double* t, int deg) {
-        ok = ok && v == next++ && deg == off[v + 1] - off[v];
-        for (int k = 0; k < deg; ++k) ok = ok && t[k] == double(off[v] + k);
-        ++seen[v];
-      },
-      1);
-  EXPECT_TRUE(ok);
-  EXPECT_EQ(next, n);
-  for (int v = 0; v < n; ++v) EXPECT_EQ(seen[v], 1) << v;
+        const LocalId u = gr.adjacency()[gr.offsets()[v] + k];
+        EXPECT_EQ(nl.adj[g * C + q], u);
+        EXPECT_EQ(nl.rho[g * C + L], gr.edge_values()[gr.offsets()[v] + k]);
+        EXPECT_EQ(((nl.fwd[g] >> L) & 1) != 0, gr.global_id(v) < gr.global_id(u));
+        EXPECT_EQ(nl.at(v, k, 2, 1), std::size_t((g * 2 + 1) * C + L));
+        EXPECT_TRUE(seen.insert(nl.at(v, k, 2, 0)).second);
+        EXPECT_TRUE(seen.insert(nl.at(v, k, 2, 1)).second);
+      }
+    }
+  }
+  EXPECT_EQ(seen.size(), gr.adjacency().size() * 2);
+}
+
+TEST(Kernels, SimdRelaxationStepEqualsScalarBitForBit) {
+  if (!have_simd()) GTEST_SKIP() << "no AVX2 on this CPU";
+  const LocalizationProblem prob = make_problem();
+  detail::NodeLanes nl;
+  nl.build(prob);
+  for (unsigned seed : {1u, 2u, 3u}) {
+    const auto w = awkward_rows(prob, seed), x = awkward_rows(prob, seed + 10);
+    const RelaxOut a = relax(prob, nl, w, x, true), b = relax(prob, nl, w, x, false);
+    EXPECT_TRUE(same_bits(a.xn, b.xn)) << seed;
+    EXPECT_TRUE(same_bits(a.wn, b.wn)) << seed;
+    EXPECT_TRUE(same_bits(a.norms, b.norms)) << seed;
+  }
+}
+
+TEST(Kernels, DiskResidualIsZeroInsideAndOnTheBoundary) {
+  // e(z, rho) = max(0, 1 - rho/|z|) z: with every range set to exactly the
+  // computed |z| (boundary) or larger (inside), and z = 0 for coincident rows,
+  // g = 0 and x(k) = w for nodes without anchors, on both paths.
+  const LocalizationProblem prob = make_problem();
+  detail::NodeLanes nl;
+  nl.build(prob);
+  std::mt19937_64 gen(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<double> w(std::size_t(prob.num_local()) * 2);
+  for (auto& v : w) v = u(gen);
+  for (std::int64_t c = 0; c < nl.size(); ++c)
+    for (int q = 0; q < nl.count[c]; ++q)
+      for (std::int64_t g = nl.group_off[c]; g < nl.group_off[c + 1]; ++g) {
+        const LocalId v = nl.first[c] + q, nb = nl.adj[g * nl.lanes + q];
+        const double zx = w[2 * std::size_t(v)] - w[2 * std::size_t(nb)];
+        const double zy = w[2 * std::size_t(v) + 1] - w[2 * std::size_t(nb) + 1];
+        const double nz = std::sqrt(zx * zx + zy * zy);
+        nl.rho[g * nl.lanes + detail::NodeLanes::lane_of_node(q, nl.lanes)] = (g % 2) ? nz : 2 * nz;
+      }
+  for (bool simd : {false, true}) {
+    if (simd && !have_simd()) continue;
+    const RelaxOut o = relax(prob, nl, w, w, simd);
+    int checked = 0;
+    for (LocalId v = 0; v < prob.num_owned(); ++v) {
+      if (prob.anchor_offsets()[v] != prob.anchor_offsets()[v + 1]) continue;
+      ++checked;
+      for (int c = 0; c < 2; ++c) {
+        EXPECT_EQ(o.xn[2 * std::size_t(v) + c], w[2 * std::size_t(v) + c]) << v << " simd " << simd;
+      }
+    }
+    EXPECT_GT(checked, 50);
+  }
+}
+
+TEST(Kernels, SimdMMStepEqualsScalarBitForBit) {
+  if (!have_simd()) GTEST_SKIP() << "no AVX2 on this CPU";
+  const LocalizationProblem prob = make_problem();
+  detail::NodeLanes nl;
+  nl.build(prob);
+  std::mt19937_64 gen(9);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const auto x = awkward_rows(prob, 4);
+  std::vector<double> y0(std::size_t(nl.groups()) * nl.lanes * 2), aw0(prob.anchor_ranges().size() * 2);
+  for (auto& v : y0) v = u(gen);
+  for (auto& v : aw0) v = u(gen);
+  // Zero edge variables next to coincident rows: the projection's 0 case.
+  const auto& off = prob.graph().offsets();
+  for (int c = 0; c < 2; ++c) y0[nl.at(10, 0, 2, c)] = 0.0;
+  ASSERT_GT(off[11], off[10]);
+  auto run = [&](bool simd, std::vector<double>* y, std::vector<double>* aw, std::vector<double>* xn,
+                 std::vector<double>* norms) {
+    *y = y0;
+    *aw = aw0;
+    xn->assign(x.size(), -7.0);
+    norms->assign(16, 0.0);
+    const bool had = detail::set_simd_enabled(simd);
+    const detail::MMStep st{x.data(), xn->data(), y->data(), aw->data(), 0.9, 0.1, norms->data()};
+    detail::mm_chunks(prob, nl, 0, nl.split, st);
+    detail::mm_chunks(prob, nl, nl.split, nl.size(), st);
+    detail::set_simd_enabled(had);
+  };
+  std::vector<double> ya, awa, xa, na, yb, awb, xb, nb;
+  run(true, &ya, &awa, &xa, &na);
+  run(false, &yb, &awb, &xb, &nb);
+  EXPECT_TRUE(same_bits(xa, xb));
+  EXPECT_TRUE(same_bits(awa, awb));
+  EXPECT_TRUE(same_bits(na, nb));
+  // Edge variables of real slots (padding lanes are never read back).
+  for (LocalId v = 0; v < prob.num_owned(); ++v)
+    for (auto e = off[v]; e < off[v + 1]; ++e)
+      for (int c = 0; c < 2; ++c) {
+        const std::size_t at = nl.at(v, e - off[v], 2, c);
+        EXPECT_TRUE(same_bits(ya[at], yb[at])) << v << " slot " << e - off[v];
+      }
+  // P_sphere(0) = rho e_1 where keep y + invL dz = 0.
+  EXPECT_EQ(ya[nl.at(10, 0, 2, 0)], prob.graph().edge_values()[off[10]]);
+  EXPECT_EQ(ya[nl.at(10, 0, 2, 1)], 0.0);
 }
