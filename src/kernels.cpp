@@ -490,20 +490,21 @@ void NodeLanes::build(const LocalizationProblem& prob) {
   const LocalId n_int = gr.num_interior(), n_owned = gr.num_owned();
   const int C = lanes = node_lanes();
   auto deg = [&](LocalId v) { return off[v + 1] - off[v]; };
-  // Two passes (widths, then fill) so that every array is allocated once, at its size.
-  std::int64_t chunks = 0, groups = 0;
+  // Two passes (widths, then fill) so that every array is allocated once, at
+  // its size. f(v0, count, width) per chunk, interior chunks first.
   auto each_chunk = [&](auto&& f) {
-    for (auto [b, e] : {std::pair<LocalId, LocalId>{0, n_int}, {n_int, n_owned}}) {
-      if (b == n_int) split = chunks;
+    for (auto [b, e] : {std::pair<LocalId, LocalId>{0, n_int}, {n_int, n_owned}})
       for (LocalId v0 = b; v0 < e; v0 += C) {
         const int cnt = static_cast<int>(std::min<LocalId>(C, e - v0));
         std::int64_t width = 0;
         for (int q = 0; q < cnt; ++q) width = std::max(width, deg(v0 + q));
         f(v0, cnt, width);
       }
-    }
   };
-  each_chunk([&](LocalId, int, std::int64_t width) {
+  std::int64_t chunks = 0, groups = 0;
+  split = 0;
+  each_chunk([&](LocalId v0, int, std::int64_t width) {
+    if (v0 < n_int) ++split;
     ++chunks;
     groups += width;
   });
@@ -517,9 +518,7 @@ void NodeLanes::build(const LocalizationProblem& prob) {
   fwd.assign(std::size_t(groups), 0);
   n_interior = n_int;
   std::int64_t c = 0;
-  chunks = 0;  // each_chunk counts again for split
   each_chunk([&](LocalId v0, int cnt, std::int64_t width) {
-    ++chunks;
     first[c] = v0;
     count[c] = static_cast<std::uint8_t>(cnt);
     const std::int64_t g0 = group_off[c];
