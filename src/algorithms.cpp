@@ -112,7 +112,8 @@ class Relaxation final : public Algorithm {
   // needed), w(k+1) = x(k) + beta_next (x(k) - x(k-1)), lane sums of the norms.
   void step(std::int64_t c0, std::int64_t c1, double beta_next) {
     detail::relax_chunks(prob_, lanes_, c0, c1,
-                         {w_.data(), x_.data(), prev_.data(), w_next_.data(), L_, beta_next, norms_});
+                         {w_.data(), x_.data(), prev_.data(), w_next_.data(), L_, beta_next, norms_,
+                          detail::stream_rows(4 * sizeof(double) * x_.size())});
   }
 
   LocalizationProblem& prob_;
@@ -157,7 +158,9 @@ class MM final : public Algorithm {
     HaloPlan& halo = prob_.graph().halo();
     const int C = lanes_.lanes;
     std::fill(std::begin(norms_), std::end(norms_), 0.0);
-    const detail::MMStep st{x_.data(), xn_.data(), y_.data(), aw_.data(), (L_ - 1.0) / L_, 1.0 / L_, norms_};
+    const std::size_t streamed = sizeof(double) * (2 * x_.size() + y_.size());
+    const detail::MMStep st{x_.data(), xn_.data(), y_.data(), aw_.data(), (L_ - 1.0) / L_, 1.0 / L_, norms_,
+                            detail::stream_rows(streamed)};
     halo.begin(x_.data(), prob_.dim());
     detail::mm_chunks(prob_, lanes_, 0, lanes_.split, st);
     halo.end(x_.data(), prob_.dim());

@@ -192,6 +192,15 @@ SNL_AVX2 inline void store_pairs(double* t, __m256d X, __m256d Y) {
   _mm256_storeu_pd(t + 4, _mm256_unpackhi_pd(X, Y));  // (x2, y2, x3, y3)
 }
 
+// store_pairs with non-temporal stores (see stream_pairs8).
+SNL_AVX2 inline void stream_pairs(double* t, __m256d X, __m256d Y) {
+  const __m256d lo = _mm256_unpacklo_pd(X, Y), hi = _mm256_unpackhi_pd(X, Y);
+  _mm_stream_pd(t, _mm256_castpd256_pd128(lo));
+  _mm_stream_pd(t + 2, _mm256_extractf128_pd(lo, 1));
+  _mm_stream_pd(t + 4, _mm256_castpd256_pd128(hi));
+  _mm_stream_pd(t + 6, _mm256_extractf128_pd(hi, 1));
+}
+
 // Rows v .. v+3 (contiguous) as (x, y) registers in the lane order of load_rows.
 SNL_AVX2 inline void load_pairs(const double* r, __m256d* X, __m256d* Y) {
   const __m256d a = _mm256_loadu_pd(r), b = _mm256_loadu_pd(r + 4);
@@ -234,8 +243,14 @@ SNL_AVX2 void relax_chunks_avx2(const LocalizationProblem& prob, const NodeLanes
     load_pairs(s.x + i0, &XX, &XY);
     const __m256d NX = _mm256_sub_pd(WX, _mm256_div_pd(AX, vL)), NY = _mm256_sub_pd(WY, _mm256_div_pd(AY, vL));
     const __m256d DX = _mm256_sub_pd(NX, XX), DY = _mm256_sub_pd(NY, XY);
-    store_pairs(s.xn + i0, NX, NY);
-    store_pairs(s.wn + i0, _mm256_add_pd(NX, _mm256_mul_pd(vb, DX)), _mm256_add_pd(NY, _mm256_mul_pd(vb, DY)));
+    const __m256d WNX = _mm256_add_pd(NX, _mm256_mul_pd(vb, DX)), WNY = _mm256_add_pd(NY, _mm256_mul_pd(vb, DY));
+    if (s.stream) {
+      stream_pairs(s.xn + i0, NX, NY);
+      stream_pairs(s.wn + i0, WNX, WNY);
+    } else {
+      store_pairs(s.xn + i0, NX, NY);
+      store_pairs(s.wn + i0, WNX, WNY);
+    }
     DD = _mm256_add_pd(_mm256_add_pd(DD, _mm256_mul_pd(DX, DX)), _mm256_mul_pd(DY, DY));
     SS = _mm256_add_pd(_mm256_add_pd(SS, _mm256_mul_pd(NX, NX)), _mm256_mul_pd(NY, NY));
     GS = _mm256_add_pd(_mm256_add_pd(GS, _mm256_mul_pd(AX, AX)), _mm256_mul_pd(AY, AY));
@@ -244,6 +259,7 @@ SNL_AVX2 void relax_chunks_avx2(const LocalizationProblem& prob, const NodeLanes
   _mm256_storeu_pd(s.norms, _mm256_permute4x64_pd(DD, _MM_SHUFFLE(3, 1, 2, 0)));
   _mm256_storeu_pd(s.norms + 4, _mm256_permute4x64_pd(SS, _MM_SHUFFLE(3, 1, 2, 0)));
   _mm256_storeu_pd(s.norms + 8, _mm256_permute4x64_pd(GS, _MM_SHUFFLE(3, 1, 2, 0)));
+  _mm_sfence();  // order the non-temporal stores before what follows
 }
 
 // Lane bits (register order) -> 64-bit lane masks.
@@ -297,12 +313,16 @@ SNL_AVX2 void mm_chunks_avx2(const LocalizationProblem& prob, const NodeLanes& n
     }
     const __m256d XX = _mm256_sub_pd(VX, _mm256_mul_pd(vinvL, AX)), XY = _mm256_sub_pd(VY, _mm256_mul_pd(vinvL, AY));
     const __m256d DX = _mm256_sub_pd(XX, VX), DY = _mm256_sub_pd(XY, VY);
-    store_pairs(s.xn + i0, XX, XY);
+    if (s.stream)
+      stream_pairs(s.xn + i0, XX, XY);
+    else
+      store_pairs(s.xn + i0, XX, XY);
     DD = _mm256_add_pd(_mm256_add_pd(DD, _mm256_mul_pd(DX, DX)), _mm256_mul_pd(DY, DY));
     SS = _mm256_add_pd(_mm256_add_pd(SS, _mm256_mul_pd(XX, XX)), _mm256_mul_pd(XY, XY));
   }
   _mm256_storeu_pd(s.norms, _mm256_permute4x64_pd(DD, _MM_SHUFFLE(3, 1, 2, 0)));
   _mm256_storeu_pd(s.norms + 4, _mm256_permute4x64_pd(SS, _MM_SHUFFLE(3, 1, 2, 0)));
+  _mm_sfence();
 }
 
 // ---- AVX-512: the same node-lane step with 8 nodes per register. Lanes
@@ -338,6 +358,21 @@ SNL_AVX512 inline void load_pairs8(const double* r, __m512d* X, __m512d* Y) {
 SNL_AVX512 inline void store_pairs8(double* t, __m512d X, __m512d Y) {
   _mm512_storeu_pd(t, _mm512_unpacklo_pd(X, Y));      // nodes 0..3
   _mm512_storeu_pd(t + 8, _mm512_unpackhi_pd(X, Y));  // nodes 4..7
+}
+
+// store_pairs8 with non-temporal stores (16-byte alignment, which
+// std::vector's storage has), for arrays that do not stay in cache from one
+// iteration to the next: the lines written are not read for ownership first.
+SNL_AVX512 inline void stream_pairs8(double* t, __m512d X, __m512d Y) {
+  const __m512d lo = _mm512_unpacklo_pd(X, Y), hi = _mm512_unpackhi_pd(X, Y);
+  _mm_stream_pd(t, _mm512_castpd512_pd128(lo));
+  _mm_stream_pd(t + 2, _mm512_extractf64x2_pd(lo, 1));
+  _mm_stream_pd(t + 4, _mm512_extractf64x2_pd(lo, 2));
+  _mm_stream_pd(t + 6, _mm512_extractf64x2_pd(lo, 3));
+  _mm_stream_pd(t + 8, _mm512_castpd512_pd128(hi));
+  _mm_stream_pd(t + 10, _mm512_extractf64x2_pd(hi, 1));
+  _mm_stream_pd(t + 12, _mm512_extractf64x2_pd(hi, 2));
+  _mm_stream_pd(t + 14, _mm512_extractf64x2_pd(hi, 3));
 }
 
 // Lane sums <-> per-node-offset arrays.
@@ -381,8 +416,14 @@ SNL_AVX512 void relax_chunks_avx512(const LocalizationProblem& prob, const NodeL
     load_pairs8(s.x + i0, &XX, &XY);
     const __m512d NX = _mm512_sub_pd(WX, _mm512_div_pd(AX, vL)), NY = _mm512_sub_pd(WY, _mm512_div_pd(AY, vL));
     const __m512d DX = _mm512_sub_pd(NX, XX), DY = _mm512_sub_pd(NY, XY);
-    store_pairs8(s.xn + i0, NX, NY);
-    store_pairs8(s.wn + i0, _mm512_add_pd(NX, _mm512_mul_pd(vb, DX)), _mm512_add_pd(NY, _mm512_mul_pd(vb, DY)));
+    const __m512d WNX = _mm512_add_pd(NX, _mm512_mul_pd(vb, DX)), WNY = _mm512_add_pd(NY, _mm512_mul_pd(vb, DY));
+    if (s.stream) {
+      stream_pairs8(s.xn + i0, NX, NY);
+      stream_pairs8(s.wn + i0, WNX, WNY);
+    } else {
+      store_pairs8(s.xn + i0, NX, NY);
+      store_pairs8(s.wn + i0, WNX, WNY);
+    }
     DD = _mm512_add_pd(_mm512_add_pd(DD, _mm512_mul_pd(DX, DX)), _mm512_mul_pd(DY, DY));
     SS = _mm512_add_pd(_mm512_add_pd(SS, _mm512_mul_pd(NX, NX)), _mm512_mul_pd(NY, NY));
     GS = _mm512_add_pd(_mm512_add_pd(GS, _mm512_mul_pd(AX, AX)), _mm512_mul_pd(AY, AY));
@@ -390,6 +431,7 @@ SNL_AVX512 void relax_chunks_avx512(const LocalizationProblem& prob, const NodeL
   store_lanes8(s.norms, DD);
   store_lanes8(s.norms + 8, SS);
   store_lanes8(s.norms + 16, GS);
+  _mm_sfence();  // order the non-temporal stores before what follows
 }
 
 SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0,
@@ -436,12 +478,16 @@ SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& prob, const NodeLane
     }
     const __m512d XX = _mm512_sub_pd(VX, _mm512_mul_pd(vinvL, AX)), XY = _mm512_sub_pd(VY, _mm512_mul_pd(vinvL, AY));
     const __m512d DX = _mm512_sub_pd(XX, VX), DY = _mm512_sub_pd(XY, VY);
-    store_pairs8(s.xn + i0, XX, XY);
+    if (s.stream)
+      stream_pairs8(s.xn + i0, XX, XY);
+    else
+      store_pairs8(s.xn + i0, XX, XY);
     DD = _mm512_add_pd(_mm512_add_pd(DD, _mm512_mul_pd(DX, DX)), _mm512_mul_pd(DY, DY));
     SS = _mm512_add_pd(_mm512_add_pd(SS, _mm512_mul_pd(XX, XX)), _mm512_mul_pd(XY, XY));
   }
   store_lanes8(s.norms, DD);
   store_lanes8(s.norms + 8, SS);
+  _mm_sfence();
 }
 #pragma GCC diagnostic pop
 #endif

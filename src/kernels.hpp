@@ -91,6 +91,14 @@ struct NodeLanes {
   void build(const LocalizationProblem& prob);
 };
 
+/// Whether the steps should write their node rows with non-temporal stores:
+/// when `bytes` (the iterate arrays one step streams) exceed what a cache
+/// keeps from one iteration to the next (16 MiB). 10M on 2 ranks: relaxation
+/// 35-36 instead of 39-40 ms/iteration while the VM's bandwidth was low,
+/// equal when it was high; at 100k (in cache) 17% slower, hence the size test
+/// (docs/performance.md).
+inline bool stream_rows(std::size_t bytes) { return bytes > (std::size_t(16) << 20); }
+
 /// One relaxation step (003, Alg. 1 steps 7-8 and the extrapolation) on the
 /// chunks [c0, c1): per node v, g = sum of the disk residuals e(w_v - w_u,
 /// rho) over its slots, then over its anchors; x(k) = w - g/L into xn, w(k+1)
@@ -103,6 +111,7 @@ struct RelaxStep {
   double* wn;
   double L, beta;
   double* norms;
+  bool stream = false;  ///< non-temporal stores of xn and wn (stream_rows)
 };
 void relax_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
                   const RelaxStep& s);
@@ -120,6 +129,7 @@ struct MMStep {
   double* aw;
   double keep, invL;
   double* norms;
+  bool stream = false;  ///< non-temporal stores of xn (stream_rows)
 };
 void mm_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
                const MMStep& s);

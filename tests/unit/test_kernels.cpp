@@ -59,10 +59,10 @@ struct RelaxOut {
 };
 
 RelaxOut relax(const LocalizationProblem& prob, const detail::NodeLanes& nl, const std::vector<double>& w,
-               const std::vector<double>& x, bool simd) {
+               const std::vector<double>& x, bool simd, bool stream = false) {
   RelaxOut o{std::vector<double>(w.size(), -7.0), std::vector<double>(w.size(), -7.0), std::vector<double>(24, 0.0)};
   const bool had = detail::set_simd_enabled(simd);
-  const detail::RelaxStep st{w.data(), x.data(), o.xn.data(), o.wn.data(), 1.7, 0.6, o.norms.data()};
+  const detail::RelaxStep st{w.data(), x.data(), o.xn.data(), o.wn.data(), 1.7, 0.6, o.norms.data(), stream};
   detail::relax_chunks(prob, nl, 0, nl.split, st);
   detail::relax_chunks(prob, nl, nl.split, nl.size(), st);
   detail::set_simd_enabled(had);
@@ -129,10 +129,13 @@ TEST(Kernels, SimdRelaxationStepEqualsScalarBitForBit) {
   nl.build(prob);
   for (unsigned seed : {1u, 2u, 3u}) {
     const auto w = awkward_rows(prob, seed), x = awkward_rows(prob, seed + 10);
-    const RelaxOut a = relax(prob, nl, w, x, true), b = relax(prob, nl, w, x, false);
-    EXPECT_TRUE(same_bits(a.xn, b.xn)) << seed;
-    EXPECT_TRUE(same_bits(a.wn, b.wn)) << seed;
-    EXPECT_TRUE(same_bits(a.norms, b.norms)) << seed;
+    const RelaxOut b = relax(prob, nl, w, x, false);
+    for (bool stream : {false, true}) {  // plain or non-temporal stores of the rows
+      const RelaxOut a = relax(prob, nl, w, x, true, stream);
+      EXPECT_TRUE(same_bits(a.xn, b.xn)) << seed << " stream " << stream;
+      EXPECT_TRUE(same_bits(a.wn, b.wn)) << seed << " stream " << stream;
+      EXPECT_TRUE(same_bits(a.norms, b.norms)) << seed << " stream " << stream;
+    }
   }
 }
 
@@ -186,21 +189,24 @@ TEST(Kernels, SimdMMStepEqualsScalarBitForBit) {
   const auto& off = prob.graph().offsets();
   for (int c = 0; c < 2; ++c) y0[nl.at(10, 0, 2, c)] = 0.0;
   ASSERT_GT(off[11], off[10]);
-  auto run = [&](bool simd, std::vector<double>* y, std::vector<double>* aw, std::vector<double>* xn,
+  auto run = [&](bool simd, bool stream, std::vector<double>* y, std::vector<double>* aw, std::vector<double>* xn,
                  std::vector<double>* norms) {
     *y = y0;
     *aw = aw0;
     xn->assign(x.size(), -7.0);
     norms->assign(16, 0.0);
     const bool had = detail::set_simd_enabled(simd);
-    const detail::MMStep st{x.data(), xn->data(), y->data(), aw->data(), 0.9, 0.1, norms->data()};
+    const detail::MMStep st{x.data(), xn->data(), y->data(), aw->data(), 0.9, 0.1, norms->data(), stream};
     detail::mm_chunks(prob, nl, 0, nl.split, st);
     detail::mm_chunks(prob, nl, nl.split, nl.size(), st);
     detail::set_simd_enabled(had);
   };
-  std::vector<double> ya, awa, xa, na, yb, awb, xb, nb;
-  run(true, &ya, &awa, &xa, &na);
-  run(false, &yb, &awb, &xb, &nb);
+  std::vector<double> ya, awa, xa, na, yb, awb, xb, nb, ys, aws, xs, ns;
+  run(true, false, &ya, &awa, &xa, &na);
+  run(false, false, &yb, &awb, &xb, &nb);
+  run(true, true, &ys, &aws, &xs, &ns);  // non-temporal stores of x(t+1)
+  EXPECT_TRUE(same_bits(xs, xb));
+  EXPECT_TRUE(same_bits(ns, nb));
   EXPECT_TRUE(same_bits(xa, xb));
   EXPECT_TRUE(same_bits(awa, awb));
   EXPECT_TRUE(same_bits(na, nb));
