@@ -213,7 +213,6 @@ SNL_AVX2 inline void load_pairs(const double* r, __m256d* X, __m256d* Y) {
 SNL_AVX2 void relax_chunks_avx2(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0,
                                 std::int64_t c1, const RelaxStep& s) {
   const __m256d one = _mm256_set1_pd(1.0), vL = _mm256_set1_pd(s.L), vb = _mm256_set1_pd(s.beta);
-  const std::int64_t* aoff = prob.anchor_offsets().data();
   __m256d DD = load_scalars_0213(s.norms), SS = load_scalars_0213(s.norms + 4), GS = load_scalars_0213(s.norms + 8);
   for (std::int64_t c = c0; c < c1; ++c) {
     const LocalId v0 = nl.first[c];
@@ -235,8 +234,7 @@ SNL_AVX2 void relax_chunks_avx2(const LocalizationProblem& prob, const NodeLanes
     if (nl.has_anchor[c]) {  // rare at scale: through memory, one node at a time
       alignas(32) double tmp[8];
       store_pairs(tmp, AX, AY);
-      for (int q = 0; q < 4; ++q)
-        if (aoff[v0 + q] != aoff[v0 + q + 1]) add_anchor_disk_terms(prob, v0 + q, s.w + i0 + 2 * q, tmp + 2 * q);
+      for (int q = 0; q < 4; ++q) add_anchor_disk_terms(prob, v0 + q, s.w + i0 + 2 * q, tmp + 2 * q);
       load_pairs(tmp, &AX, &AY);
     }
     __m256d XX, XY;
@@ -273,7 +271,6 @@ SNL_AVX2 void mm_chunks_avx2(const LocalizationProblem& prob, const NodeLanes& n
                              const MMStep& s) {
   const __m256d one = _mm256_set1_pd(1.0), minus_one = _mm256_set1_pd(-1.0), zero = _mm256_setzero_pd();
   const __m256d vkeep = _mm256_set1_pd(s.keep), vinvL = _mm256_set1_pd(s.invL);
-  const std::int64_t* aoff = prob.anchor_offsets().data();
   __m256d DD = load_scalars_0213(s.norms), SS = load_scalars_0213(s.norms + 4);
   for (std::int64_t c = c0; c < c1; ++c) {
     const LocalId v0 = nl.first[c];
@@ -307,8 +304,7 @@ SNL_AVX2 void mm_chunks_avx2(const LocalizationProblem& prob, const NodeLanes& n
       alignas(32) double tmp[8];
       store_pairs(tmp, AX, AY);
       for (int q = 0; q < 4; ++q)
-        if (aoff[v0 + q] != aoff[v0 + q + 1])
-          add_anchor_mm_terms<2>(prob, v0 + q, s.x + i0 + 2 * q, s.keep, s.invL, s.aw, tmp + 2 * q);
+        add_anchor_mm_terms<2>(prob, v0 + q, s.x + i0 + 2 * q, s.keep, s.invL, s.aw, tmp + 2 * q);
       load_pairs(tmp, &AX, &AY);
     }
     const __m256d XX = _mm256_sub_pd(VX, _mm256_mul_pd(vinvL, AX)), XY = _mm256_sub_pd(VY, _mm256_mul_pd(vinvL, AY));
@@ -386,7 +382,6 @@ SNL_AVX512 inline void store_lanes8(double* q, __m512d v) {
 SNL_AVX512 void relax_chunks_avx512(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0,
                                     std::int64_t c1, const RelaxStep& s) {
   const __m512d one = _mm512_set1_pd(1.0), vL = _mm512_set1_pd(s.L), vb = _mm512_set1_pd(s.beta);
-  const std::int64_t* aoff = prob.anchor_offsets().data();
   __m512d DD = load_lanes8(s.norms), SS = load_lanes8(s.norms + 8), GS = load_lanes8(s.norms + 16);
   for (std::int64_t c = c0; c < c1; ++c) {
     const LocalId v0 = nl.first[c];
@@ -408,8 +403,7 @@ SNL_AVX512 void relax_chunks_avx512(const LocalizationProblem& prob, const NodeL
     if (nl.has_anchor[c]) {
       alignas(64) double tmp[16];
       store_pairs8(tmp, AX, AY);
-      for (int q = 0; q < 8; ++q)
-        if (aoff[v0 + q] != aoff[v0 + q + 1]) add_anchor_disk_terms(prob, v0 + q, s.w + i0 + 2 * q, tmp + 2 * q);
+      for (int q = 0; q < 8; ++q) add_anchor_disk_terms(prob, v0 + q, s.w + i0 + 2 * q, tmp + 2 * q);
       load_pairs8(tmp, &AX, &AY);
     }
     __m512d XX, XY;
@@ -438,7 +432,6 @@ SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& prob, const NodeLane
                                  std::int64_t c1, const MMStep& s) {
   const __m512d minus_one = _mm512_set1_pd(-1.0), zero = _mm512_setzero_pd();
   const __m512d vkeep = _mm512_set1_pd(s.keep), vinvL = _mm512_set1_pd(s.invL);
-  const std::int64_t* aoff = prob.anchor_offsets().data();
   __m512d DD = load_lanes8(s.norms), SS = load_lanes8(s.norms + 8);
   for (std::int64_t c = c0; c < c1; ++c) {
     const LocalId v0 = nl.first[c];
@@ -472,8 +465,7 @@ SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& prob, const NodeLane
       alignas(64) double tmp[16];
       store_pairs8(tmp, AX, AY);
       for (int q = 0; q < 8; ++q)
-        if (aoff[v0 + q] != aoff[v0 + q + 1])
-          add_anchor_mm_terms<2>(prob, v0 + q, s.x + i0 + 2 * q, s.keep, s.invL, s.aw, tmp + 2 * q);
+        add_anchor_mm_terms<2>(prob, v0 + q, s.x + i0 + 2 * q, s.keep, s.invL, s.aw, tmp + 2 * q);
       load_pairs8(tmp, &AX, &AY);
     }
     const __m512d XX = _mm512_sub_pd(VX, _mm512_mul_pd(vinvL, AX)), XY = _mm512_sub_pd(VY, _mm512_mul_pd(vinvL, AY));
@@ -590,49 +582,67 @@ void NodeLanes::build(const LocalizationProblem& prob) {
   });
 }
 
-void relax_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
-                  const RelaxStep& s) {
+namespace {
+
+// Chunks [c0, c1) of one part: the full ones through the SIMD kernel of the
+// layout's lane width where the CPU allows it (p = 2), the rest (the part's
+// partial last chunk; everything for p = 3 or without SIMD) through the
+// scalar twin. Kernel is a tag with the three functions as static members.
+template <class Kernel, class Step>
+void run_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
+                const Step& s) {
   if (c0 >= c1) return;
   const int p = prob.dim();
-  std::int64_t full = c1;  // only the last chunk of a part can be partial
-  if (nl.count[c1 - 1] != nl.lanes) --full;
+  const std::int64_t full = nl.count[c1 - 1] == nl.lanes ? c1 : c1 - 1;
 #ifdef SNL_HAVE_AVX2_PATH
   if (p == 2 && g_level == 2 && nl.lanes == 8) {
-    relax_chunks_avx512(prob, nl, c0, full, s);
+    Kernel::avx512(prob, nl, c0, full, s);
     c0 = full;
   } else if (p == 2 && g_level >= 1 && nl.lanes == 4) {
-    relax_chunks_avx2(prob, nl, c0, full, s);
+    Kernel::avx2(prob, nl, c0, full, s);
     c0 = full;
   }
 #endif
   for (std::int64_t c = c0; c < c1; ++c) {
     if (p == 2)
-      relax_chunk_scalar<2>(prob, nl, c, s);
+      Kernel::template scalar<2>(prob, nl, c, s);
     else
-      relax_chunk_scalar<3>(prob, nl, c, s);
+      Kernel::template scalar<3>(prob, nl, c, s);
   }
+}
+
+struct RelaxKernels {
+#ifdef SNL_HAVE_AVX2_PATH
+  static constexpr auto avx512 = relax_chunks_avx512;
+  static constexpr auto avx2 = relax_chunks_avx2;
+#endif
+  template <int P>
+  static void scalar(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c, const RelaxStep& s) {
+    relax_chunk_scalar<P>(prob, nl, c, s);
+  }
+};
+
+struct MMKernels {
+#ifdef SNL_HAVE_AVX2_PATH
+  static constexpr auto avx512 = mm_chunks_avx512;
+  static constexpr auto avx2 = mm_chunks_avx2;
+#endif
+  template <int P>
+  static void scalar(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c, const MMStep& s) {
+    mm_chunk_scalar<P>(prob, nl, c, s);
+  }
+};
+
+}  // namespace
+
+void relax_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
+                  const RelaxStep& s) {
+  run_chunks<RelaxKernels>(prob, nl, c0, c1, s);
 }
 
 void mm_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
                const MMStep& s) {
-  if (c0 >= c1) return;
-  const int p = prob.dim();
-  std::int64_t full = c1;
-  if (nl.count[c1 - 1] != nl.lanes) --full;
-#ifdef SNL_HAVE_AVX2_PATH
-  if (p == 2 && g_level == 2 && nl.lanes == 8) {
-    mm_chunks_avx512(prob, nl, c0, full, s);
-    c0 = full;
-  } else if (p == 2 && g_level >= 1 && nl.lanes == 4) {
-    mm_chunks_avx2(prob, nl, c0, full, s);
-    c0 = full;
-  }
-#endif
-  for (std::int64_t c = c0; c < c1; ++c) {
-    if (p == 2)
-      mm_chunk_scalar<2>(prob, nl, c, s);
-    else
-      mm_chunk_scalar<3>(prob, nl, c, s);
-  }
+  run_chunks<MMKernels>(prob, nl, c0, c1, s);
 }
+
 }  // namespace snl::detail
