@@ -163,15 +163,14 @@ void mm_chunk_scalar(const LocalizationProblem& prob, const NodeLanes& nl, std::
 }
 
 #ifdef SNL_HAVE_AVX2_PATH
-// ---- AVX2: 4 slots at a time. Rows are loaded as (x, y) pairs; after the
-// unpack the lanes hold slots in the order (0, 2, 1, 3), so per-slot scalars
-// (rho, fwd) are permuted the same way and the terms are re-interleaved on
-// the way out. Only IEEE add/sub/mul/div/sqrt: no FMA (not enabled for these
-// functions), so every lane equals the scalar result bit for bit. They take
-// whole groups of 4 slots and return; the dispatcher runs the scalar twin on
-// the rest. (A tail call from here into the scalar code got no vzeroupper from
-// GCC, and the dirty upper ymm state slowed the caller's SSE node phase by
-// ~40%: docs/performance.md.)
+// ---- AVX2: the node-lane steps with 4 nodes per register. Rows are loaded
+// as (x, y) pairs; after the unpack the lanes hold nodes (0, 2, 1, 3) of the
+// chunk (NodeLanes::lane_node), and per-slot scalars (rho, the lane bits) are
+// stored in that order. Only IEEE add/sub/mul/div/sqrt and no FMA, so every
+// lane equals the scalar twin bit for bit. The kernels return normally (GCC
+// emits vzeroupper there): an earlier tail call from AVX2 code into scalar code
+// got none, and the dirty upper ymm state slowed the caller's SSE code by
+// ~40% (docs/performance.md).
 #define SNL_AVX2 __attribute__((target("avx2")))
 
 SNL_AVX2 inline void load_rows(const double* x, const LocalId* idx, __m256d* X, __m256d* Y) {
