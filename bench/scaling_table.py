@@ -41,6 +41,9 @@ def main(path):
     t1w = {r["algorithm"]: r["iterate_seconds"] for r in runs if r["ranks"] == 1 and r["num_sensors"] == 1000000}
     print(f"STREAM triad: {stream['gbs_1']:.2f} GB/s (1 rank), {stream['gbs_all']:.2f} GB/s "
           f"({stream['nproc']} ranks; the bound below uses this)")
+    # A loop at the memory bound on 1 and on N ranks scales by the bandwidths' ratio.
+    print(f"bandwidth cap on strong scaling 1 -> {stream['nproc']} ranks: "
+          f"{stream['gbs_all'] / (stream['nproc'] * stream['gbs_1']):.2f} (par_eff of a memory-bound loop)")
     for n, g in sorted(gens.items()):
         print(f"generate n={n}: {g['generate_seconds']:.2f} s + write {g['gen_write_seconds']:.2f} s, "
               f"peak RSS {g['gen_rss_kib'] / 2**20:.2f} GiB (rank 0, serial)")
