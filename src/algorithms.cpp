@@ -120,7 +120,7 @@ class Relaxation final : public Algorithm {
   double L_;
   std::vector<double> x_, prev_, w_, w_next_;
   detail::NodeLanes lanes_;
-  double norms_[3 * 8];  // per lane: ||x(k) - x(k-1)||^2, ||x(k)||^2, ||g||^2
+  double norms_[3 * detail::kMaxLanes];  // per lane: ||x(k) - x(k-1)||^2, ||x(k)||^2, ||g||^2
   bool w_ready_ = false;
   std::int64_t k_ = 0;
   double diff_sq_ = 0, x_sq_ = 0, gsq_ = 0;
@@ -195,31 +195,26 @@ class MM final : public Algorithm {
     *d = diff_sq_;
     *s = x_sq_;
   }
-  // Checkpoints hold y in CSR slot order (independent of the SIMD lane width).
+  // Checkpoints hold y per CSR slot, as every layout-independent file does
+  // (edge_rows with an accessor: the lane layout is not copied).
   void save(StateWriter& w) const override {
     w.node_rows("x", x_.data(), prob_.dim());
-    std::vector<double> y(prob_.graph().adjacency().size() * prob_.dim());
-    for_slots([&](std::size_t e, int c, std::size_t at) { y[e * prob_.dim() + c] = y_[at]; });
-    w.edge_rows("y", y.data(), prob_.dim());
+    w.edge_rows("y", prob_.dim(), [&](std::int64_t e, int c) { return y_[y_index(e, c)]; });
     w.anchor_rows("w", aw_.data(), prob_.dim());
   }
   void load(const StateReader& r) override {
     r.node_rows("x", x_.data(), prob_.dim());
-    std::vector<double> y(prob_.graph().adjacency().size() * prob_.dim());
-    r.edge_rows("y", y.data(), prob_.dim());
-    for_slots([&](std::size_t e, int c, std::size_t at) { y_[at] = y[e * prob_.dim() + c]; });
+    r.edge_rows("y", prob_.dim(), [&](std::int64_t e, int c, double v) { y_[y_index(e, c)] = v; });
     r.anchor_rows("w", aw_.data(), prob_.dim());
   }
 
  private:
-  // f(CSR slot e, coordinate c, index of y_e[c] in the lane layout).
-  template <class F>
-  void for_slots(F&& f) const {
+  // Index in y_ (lane layout) of coordinate c of CSR slot e. The owner of e
+  // is found by a binary search in the offsets: checkpoints only.
+  std::size_t y_index(std::int64_t e, int c) const {
     const auto& off = prob_.graph().offsets();
-    const int p = prob_.dim();
-    for (LocalId v = 0; v < prob_.num_owned(); ++v)
-      for (auto e = off[v]; e < off[v + 1]; ++e)
-        for (int c = 0; c < p; ++c) f(std::size_t(e), c, lanes_.at(v, e - off[v], p, c));
+    const auto v = static_cast<LocalId>(std::upper_bound(off.begin(), off.end(), e) - off.begin() - 1);
+    return lanes_.at(v, e - off[v], prob_.dim(), c);
   }
 
   template <int P>
@@ -290,7 +285,7 @@ class MM final : public Algorithm {
   double L_;
   std::vector<double> x_, xn_, y_, aw_;  // y_: edge variables in the lane layout (NodeLanes::at)
   detail::NodeLanes lanes_;
-  double norms_[2 * 8];  // per lane: ||x(t+1) - x(t)||^2, ||x(t+1)||^2
+  double norms_[2 * detail::kMaxLanes];  // per lane: ||x(t+1) - x(t)||^2, ||x(t+1)||^2
   double diff_sq_ = 0, x_sq_ = 0;
 };
 

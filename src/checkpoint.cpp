@@ -112,6 +112,11 @@ void StateWriter::node_rows(const std::string& name, const double* owned, int wi
 }
 
 void StateWriter::edge_rows(const std::string& name, const double* per_entry, int width) {
+  edge_rows(name, width, [&](std::int64_t e, int c) { return per_entry[e * width + c]; });
+}
+
+void StateWriter::edge_rows(const std::string& name, int width,
+                            const std::function<double(std::int64_t, int)>& get) {
   const auto& g = prob_.graph();
   std::vector<GlobalId> keys;
   std::vector<double> vals;
@@ -121,7 +126,7 @@ void StateWriter::edge_rows(const std::string& name, const double* per_entry, in
       if (a > b) continue;
       keys.push_back(a);
       keys.push_back(b);
-      vals.insert(vals.end(), per_entry + e * width, per_entry + (e + 1) * width);
+      for (int c = 0; c < width; ++c) vals.push_back(get(e, c));
     }
   write_keyed(f_, prefix_ + name, keys, vals, width);
 }
@@ -155,6 +160,11 @@ void StateReader::node_rows(const std::string& name, double* owned, int width) c
 }
 
 void StateReader::edge_rows(const std::string& name, double* per_entry, int width) const {
+  edge_rows(name, width, [&](std::int64_t e, int c, double x) { per_entry[e * width + c] = x; });
+}
+
+void StateReader::edge_rows(const std::string& name, int width,
+                            const std::function<void(std::int64_t, int, double)>& set) const {
   const auto& g = prob_.graph();
   std::vector<GlobalId> want;
   want.reserve(g.adjacency().size() * 2);
@@ -165,7 +175,7 @@ void StateReader::edge_rows(const std::string& name, double* per_entry, int widt
       want.push_back(std::max(a, b));
     }
   const auto vals = read_keyed(f_, prefix_ + name, want, width, prob_.num_sensors());
-  std::copy(vals.begin(), vals.end(), per_entry);
+  for (std::size_t k = 0; k < vals.size(); ++k) set(std::int64_t(k) / width, int(k % width), vals[k]);
 }
 
 void StateReader::anchor_rows(const std::string& name, double* per_entry, int width) const {

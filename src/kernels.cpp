@@ -32,6 +32,7 @@ const char* simd_env() {
 }
 const int g_cpu = cpu_level();
 const int g_lanes = (g_cpu == 2 && std::strcmp(simd_env(), "avx2") != 0) ? 8 : 4;
+static_assert(kMaxLanes == 8, "per-lane scratch sized for AVX-512");
 // The best level the lane width allows (8 lanes: AVX-512, 4 lanes: AVX2).
 const int g_top = std::min(g_cpu, g_lanes == 8 ? 2 : 1);
 int g_level = (std::strcmp(simd_env(), "0") == 0 || std::strcmp(simd_env(), "scalar") == 0) ? 0 : g_top;

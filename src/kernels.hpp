@@ -48,6 +48,8 @@ void add_anchor_disk_terms(const LocalizationProblem& prob, LocalId v, const dou
 /// set_simd_enabled: the layout, and with it every rounding of the lane sums,
 /// is then the same on the SIMD and on the scalar path.
 int node_lanes();
+/// The largest value node_lanes() returns (size of per-lane scratch).
+inline constexpr int kMaxLanes = 8;
 /// The instruction set the kernels use now: "avx512", "avx2" or "scalar".
 const char* simd_name();
 

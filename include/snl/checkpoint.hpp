@@ -4,6 +4,7 @@
 // as (i, j, values) records with i < j, each edge once; per-anchor-edge data as
 // (i, k, values) records. Layout in docs/formats.md.
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,9 @@ class StateWriter {
   /// One row per adjacency entry (graph CSR order); the copy held by the
   /// smaller-id end is stored (both ends hold identical values).
   void edge_rows(const std::string& name, const double* per_entry, int width);
+  /// The same, with value c of CSR entry e given by get(e, c) (for state kept
+  /// in another layout: no copy of it is made).
+  void edge_rows(const std::string& name, int width, const std::function<double(std::int64_t, int)>& get);
   /// One row per anchor measurement of owned nodes (anchor CSR order).
   void anchor_rows(const std::string& name, const double* per_entry, int width);
 
@@ -38,6 +42,9 @@ class StateReader {
   double scalar(const std::string& name) const;
   void node_rows(const std::string& name, double* owned, int width) const;
   void edge_rows(const std::string& name, double* per_entry, int width) const;
+  /// The same, handing value c of CSR entry e to set(e, c, value).
+  void edge_rows(const std::string& name, int width,
+                 const std::function<void(std::int64_t, int, double)>& set) const;
   void anchor_rows(const std::string& name, double* per_entry, int width) const;
 
  private:

@@ -7,7 +7,7 @@ source "$(dirname "$0")/common.bash"
 "$SNL" generate -o "$T/net.h5" --sensors 3000 --avg-degree 7 --sigma 0.05 --seed 21 -q
 "$SNL" generate -o "$T/other.h5" --sensors 3000 --avg-degree 7 --sigma 0.05 --seed 22 -q
 "$SNL" generate -o "$T/small.h5" --sensors 400 --avg-degree 7 --sigma 0.05 --seed 23 -q
-for alg in async pipeline bb; do
+for alg in async pipeline bb mm; do
   ARGS=(--max-iter 4000 --tol 0 -q)
   NET="$T/net.h5"
   EVERY=100
