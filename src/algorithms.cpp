@@ -36,6 +36,7 @@ class Relaxation final : public Algorithm {
     w_next_.assign(x_.size(), 0.0);
     w_ready_ = false;
     lanes_.build(prob_);
+    stream_ = detail::stream_rows(4 * sizeof(double) * x_.size());
     k_ = 0;
   }
 
@@ -60,10 +61,8 @@ class Relaxation final : public Algorithm {
     step(0, lanes_.split, beta_next);
     halo.end(w_.data(), p);
     step(lanes_.split, lanes_.size(), beta_next);
-    const int C = lanes_.lanes;
-    double sums[3] = {0, 0, 0};
-    for (int j = 0; j < 3; ++j)
-      for (int q = 0; q < C; ++q) sums[j] += norms_[j * C + q];
+    double sums[3];
+    detail::sum_lanes(norms_, lanes_.lanes, 3, sums);
     diff_sq_ = sums[0];
     x_sq_ = sums[1];
     gsq_ = sums[2];
@@ -112,8 +111,7 @@ class Relaxation final : public Algorithm {
   // needed), w(k+1) = x(k) + beta_next (x(k) - x(k-1)), lane sums of the norms.
   void step(std::int64_t c0, std::int64_t c1, double beta_next) {
     detail::relax_chunks(prob_, lanes_, c0, c1,
-                         {w_.data(), x_.data(), prev_.data(), w_next_.data(), L_, beta_next, norms_,
-                          detail::stream_rows(4 * sizeof(double) * x_.size())});
+                         {w_.data(), x_.data(), prev_.data(), w_next_.data(), L_, beta_next, norms_, stream_});
   }
 
   LocalizationProblem& prob_;
@@ -121,6 +119,7 @@ class Relaxation final : public Algorithm {
   std::vector<double> x_, prev_, w_, w_next_;
   detail::NodeLanes lanes_;
   double norms_[3 * detail::kMaxLanes];  // per lane: ||x(k) - x(k-1)||^2, ||x(k)||^2, ||g||^2
+  bool stream_ = false;                  // non-temporal row stores (kernels.hpp)
   bool w_ready_ = false;
   std::int64_t k_ = 0;
   double diff_sq_ = 0, x_sq_ = 0, gsq_ = 0;
@@ -150,24 +149,22 @@ class MM final : public Algorithm {
       init<2>();
     else
       init<3>();
+    stream_ = detail::stream_rows(sizeof(double) * (2 * x_.size() + y_.size()));
   }
 
   // Halo begin -> interior chunks -> halo end -> boundary chunks; the norms
   // are summed per lane, then over the lanes in lane order.
   void iterate() override {
     HaloPlan& halo = prob_.graph().halo();
-    const int C = lanes_.lanes;
     std::fill(std::begin(norms_), std::end(norms_), 0.0);
-    const std::size_t streamed = sizeof(double) * (2 * x_.size() + y_.size());
     const detail::MMStep st{x_.data(), xn_.data(), y_.data(), aw_.data(), (L_ - 1.0) / L_, 1.0 / L_, norms_,
-                            detail::stream_rows(streamed)};
+                            stream_};
     halo.begin(x_.data(), prob_.dim());
     detail::mm_chunks(prob_, lanes_, 0, lanes_.split, st);
     halo.end(x_.data(), prob_.dim());
     detail::mm_chunks(prob_, lanes_, lanes_.split, lanes_.size(), st);
-    double sums[2] = {0, 0};
-    for (int j = 0; j < 2; ++j)
-      for (int q = 0; q < C; ++q) sums[j] += norms_[j * C + q];
+    double sums[2];
+    detail::sum_lanes(norms_, lanes_.lanes, 2, sums);
     diff_sq_ = sums[0];
     x_sq_ = sums[1];
     std::swap(x_, xn_);
@@ -195,26 +192,23 @@ class MM final : public Algorithm {
     *d = diff_sq_;
     *s = x_sq_;
   }
-  // Checkpoints hold y per CSR slot, as every layout-independent file does
-  // (edge_rows with an accessor: the lane layout is not copied).
+  // Checkpoints hold y per edge, independent of the lane layout (edge_rows
+  // with an accessor: the layout is not copied).
   void save(StateWriter& w) const override {
     w.node_rows("x", x_.data(), prob_.dim());
-    w.edge_rows("y", prob_.dim(), [&](std::int64_t e, int c) { return y_[y_index(e, c)]; });
+    w.edge_rows("y", prob_.dim(), [&](LocalId v, std::int64_t e, int c) { return y_[y_index(v, e, c)]; });
     w.anchor_rows("w", aw_.data(), prob_.dim());
   }
   void load(const StateReader& r) override {
     r.node_rows("x", x_.data(), prob_.dim());
-    r.edge_rows("y", prob_.dim(), [&](std::int64_t e, int c, double v) { y_[y_index(e, c)] = v; });
+    r.edge_rows("y", prob_.dim(), [&](LocalId v, std::int64_t e, int c, double y) { y_[y_index(v, e, c)] = y; });
     r.anchor_rows("w", aw_.data(), prob_.dim());
   }
 
  private:
-  // Index in y_ (lane layout) of coordinate c of CSR slot e. The owner of e
-  // is found by a binary search in the offsets: checkpoints only.
-  std::size_t y_index(std::int64_t e, int c) const {
-    const auto& off = prob_.graph().offsets();
-    const auto v = static_cast<LocalId>(std::upper_bound(off.begin(), off.end(), e) - off.begin() - 1);
-    return lanes_.at(v, e - off[v], prob_.dim(), c);
+  // Index in y_ (lane layout) of coordinate c of CSR slot e of owned node v.
+  std::size_t y_index(LocalId v, std::int64_t e, int c) const {
+    return lanes_.at(v, e - prob_.graph().offsets()[v], prob_.dim(), c);
   }
 
   template <int P>
@@ -230,7 +224,7 @@ class MM final : public Algorithm {
         double y[P];
         for (int c = 0; c < P; ++c) y[c] = x_[std::size_t(i) * P + c] - x_[std::size_t(j) * P + c];
         project_sphere<P>(gr.edge_value(e), y);
-        for (int c = 0; c < P; ++c) y_[lanes_.at(v, e - off[v], P, c)] = y[c];
+        for (int c = 0; c < P; ++c) y_[y_index(v, e, c)] = y[c];
       }
       const auto& aoff = prob_.anchor_offsets();
       for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
@@ -261,7 +255,7 @@ class MM final : public Algorithm {
         if (gr.global_id(u) < gv) continue;
         double s = 0;
         for (int c = 0; c < P; ++c) {
-          const double r = x_[std::size_t(v) * P + c] - x_[std::size_t(u) * P + c] - y_[lanes_.at(v, e - off[v], P, c)];
+          const double r = x_[std::size_t(v) * P + c] - x_[std::size_t(u) * P + c] - y_[y_index(v, e, c)];
           s += r * r;
         }
         F += 0.5 * s;
@@ -286,6 +280,7 @@ class MM final : public Algorithm {
   std::vector<double> x_, xn_, y_, aw_;  // y_: edge variables in the lane layout (NodeLanes::at)
   detail::NodeLanes lanes_;
   double norms_[2 * detail::kMaxLanes];  // per lane: ||x(t+1) - x(t)||^2, ||x(t+1)||^2
+  bool stream_ = false;                  // non-temporal row stores (kernels.hpp)
   double diff_sq_ = 0, x_sq_ = 0;
 };
 

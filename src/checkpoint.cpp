@@ -112,11 +112,11 @@ void StateWriter::node_rows(const std::string& name, const double* owned, int wi
 }
 
 void StateWriter::edge_rows(const std::string& name, const double* per_entry, int width) {
-  edge_rows(name, width, [&](std::int64_t e, int c) { return per_entry[e * width + c]; });
+  edge_rows(name, width, [&](LocalId, std::int64_t e, int c) { return per_entry[e * width + c]; });
 }
 
 void StateWriter::edge_rows(const std::string& name, int width,
-                            const std::function<double(std::int64_t, int)>& get) {
+                            const std::function<double(LocalId, std::int64_t, int)>& get) {
   const auto& g = prob_.graph();
   std::vector<GlobalId> keys;
   std::vector<double> vals;
@@ -126,7 +126,7 @@ void StateWriter::edge_rows(const std::string& name, int width,
       if (a > b) continue;
       keys.push_back(a);
       keys.push_back(b);
-      for (int c = 0; c < width; ++c) vals.push_back(get(e, c));
+      for (int c = 0; c < width; ++c) vals.push_back(get(v, e, c));
     }
   write_keyed(f_, prefix_ + name, keys, vals, width);
 }
@@ -160,11 +160,11 @@ void StateReader::node_rows(const std::string& name, double* owned, int width) c
 }
 
 void StateReader::edge_rows(const std::string& name, double* per_entry, int width) const {
-  edge_rows(name, width, [&](std::int64_t e, int c, double x) { per_entry[e * width + c] = x; });
+  edge_rows(name, width, [&](LocalId, std::int64_t e, int c, double x) { per_entry[e * width + c] = x; });
 }
 
 void StateReader::edge_rows(const std::string& name, int width,
-                            const std::function<void(std::int64_t, int, double)>& set) const {
+                            const std::function<void(LocalId, std::int64_t, int, double)>& set) const {
   const auto& g = prob_.graph();
   std::vector<GlobalId> want;
   want.reserve(g.adjacency().size() * 2);
@@ -175,7 +175,10 @@ void StateReader::edge_rows(const std::string& name, int width,
       want.push_back(std::max(a, b));
     }
   const auto vals = read_keyed(f_, prefix_ + name, want, width, prob_.num_sensors());
-  for (std::size_t k = 0; k < vals.size(); ++k) set(std::int64_t(k) / width, int(k % width), vals[k]);
+  // vals holds the entries in (v, e) order, as asked for.
+  for (LocalId v = 0; v < g.num_owned(); ++v)
+    for (auto e = g.offsets()[v]; e < g.offsets()[v + 1]; ++e)
+      for (int c = 0; c < width; ++c) set(v, e, c, vals[std::size_t(e) * width + c]);
 }
 
 void StateReader::anchor_rows(const std::string& name, double* per_entry, int width) const {

@@ -129,11 +129,6 @@ struct Entry {
   std::int64_t src;  // index into the received edge list (for values)
 };
 
-// Reverse Cuthill-McKee of the graph (cnt, nbrs) restricted to `nodes` (one
-// group: interior or boundary): BFS from a pseudo-peripheral node (George-Liu,
-// one sweep), children by increasing degree, then reversed. `pos[v]` is v's
-// position in `nodes` or -1 for nodes outside the group. Deterministic: ties
-// are broken by the order of `nodes` (global id order).
 // Within consecutive windows of kDegreeWindow nodes, nodes of equal degree
 // next to each other (stable sort by degree): the node-lane kernels pad each
 // chunk of SIMD lanes to its largest degree (kernels.hpp; the sigma of
@@ -149,6 +144,11 @@ void sort_degree_windows(std::vector<std::int64_t>& grp, const std::vector<std::
   }
 }
 
+// Reverse Cuthill-McKee of the graph (cnt, nbrs) restricted to `nodes` (one
+// group: interior or boundary): BFS from a pseudo-peripheral node (George-Liu,
+// one sweep), children by increasing degree, then reversed. `pos[v]` is v's
+// position in `nodes` or -1 for nodes outside the group. Deterministic: ties
+// are broken by the order of `nodes` (global id order).
 std::vector<std::int64_t> rcm_order(const std::vector<std::int64_t>& nodes, const std::vector<std::int64_t>& cnt,
                                     const std::vector<std::int64_t>& nbrs, const std::vector<std::int64_t>& pos) {
   const std::size_t m = nodes.size();

@@ -75,8 +75,6 @@ inline void mm_term(const double* xv, const double* xu, bool fwd, double rho, do
   for (int c = 0; c < P; ++c) y[c] = yn[c];
 }
 
-inline int lane_of_node(int q, int C) { return NodeLanes::lane_of_node(q, C); }
-
 // The node-lane relaxation step, one node at a time: the reference for the
 // SIMD versions (and the path for p = 3, for partial chunks and CPUs without
 // AVX2). Padding slots are skipped: the SIMD lanes add +0.0 there, which
@@ -89,7 +87,7 @@ void relax_chunk_scalar(const LocalizationProblem& prob, const NodeLanes& nl, st
   for (int q = 0; q < nl.count[c]; ++q) {
     const LocalId v = nl.first[c] + q;
     const std::size_t i0 = std::size_t(v) * P;
-    const int L = lane_of_node(q, C);
+    const int L = NodeLanes::lane_of_node(q, C);
     double acc[P] = {}, t[P];
     for (std::int64_t g = g0; g < g1; ++g) {
       if (!((nl.real[g] >> L) & 1)) continue;
@@ -139,7 +137,7 @@ void mm_chunk_scalar(const LocalizationProblem& prob, const NodeLanes& nl, std::
   for (int q = 0; q < nl.count[c]; ++q) {
     const LocalId v = nl.first[c] + q;
     const double* xv = s.x + std::size_t(v) * P;
-    const int L = lane_of_node(q, C);
+    const int L = NodeLanes::lane_of_node(q, C);
     double acc[P] = {}, t[P], y[P];
     for (std::int64_t g = g0; g < g1; ++g) {
       if (!((nl.real[g] >> L) & 1)) continue;
@@ -566,7 +564,7 @@ void NodeLanes::build(const LocalizationProblem& prob) {
       has_anchor[c] |= aoff[v] != aoff[v + 1];
       for (std::int64_t g = 0; g < width; ++g) {
         const std::size_t at = std::size_t(g0 + g) * C;
-        const int L = lane_of_node(q, C);
+        const int L = NodeLanes::lane_of_node(q, C);
         if (g >= deg(v)) {  // padding: the node itself, range 1
           adj[at + q] = v;
           continue;

@@ -101,6 +101,15 @@ struct NodeLanes {
 /// (docs/performance.md).
 inline bool stream_rows(std::size_t bytes) { return bytes > (std::size_t(16) << 20); }
 
+/// out[j] = sum over the lanes of norms[j C .. j C + C) in lane order, j < n:
+/// the steps' per-lane norm sums, combined the same way on every path.
+inline void sum_lanes(const double* norms, int C, int n, double* out) {
+  for (int j = 0; j < n; ++j) {
+    out[j] = 0;
+    for (int q = 0; q < C; ++q) out[j] += norms[j * C + q];
+  }
+}
+
 /// One relaxation step (003, Alg. 1 steps 7-8 and the extrapolation) on the
 /// chunks [c0, c1): per node v, g = sum of the disk residuals e(w_v - w_u,
 /// rho) over its slots, then over its anchors; x(k) = w - g/L into xn, w(k+1)

@@ -23,9 +23,10 @@ class StateWriter {
   /// One row per adjacency entry (graph CSR order); the copy held by the
   /// smaller-id end is stored (both ends hold identical values).
   void edge_rows(const std::string& name, const double* per_entry, int width);
-  /// The same, with value c of CSR entry e given by get(e, c) (for state kept
-  /// in another layout: no copy of it is made).
-  void edge_rows(const std::string& name, int width, const std::function<double(std::int64_t, int)>& get);
+  /// The same, with value c of CSR entry e of owned node v given by get(v, e,
+  /// c) (for state kept in another layout: no copy of it is made).
+  void edge_rows(const std::string& name, int width,
+                 const std::function<double(LocalId, std::int64_t, int)>& get);
   /// One row per anchor measurement of owned nodes (anchor CSR order).
   void anchor_rows(const std::string& name, const double* per_entry, int width);
 
@@ -42,9 +43,9 @@ class StateReader {
   double scalar(const std::string& name) const;
   void node_rows(const std::string& name, double* owned, int width) const;
   void edge_rows(const std::string& name, double* per_entry, int width) const;
-  /// The same, handing value c of CSR entry e to set(e, c, value).
+  /// The same, handing value c of CSR entry e of owned node v to set(v, e, c, value).
   void edge_rows(const std::string& name, int width,
-                 const std::function<void(std::int64_t, int, double)>& set) const;
+                 const std::function<void(LocalId, std::int64_t, int, double)>& set) const;
   void anchor_rows(const std::string& name, double* per_entry, int width) const;
 
  private:
