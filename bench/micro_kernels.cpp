@@ -6,7 +6,8 @@
 //
 //   build/bench/snl_micro [--benchmark_filter=...]          (1 rank)
 //   mpirun -np 2 build/bench/snl_micro --benchmark_filter=Halo (2 ranks)
-// SNL_MICRO_SENSORS sets n (default 1,000,000: well out of cache).
+// SNL_MICRO_SENSORS sets n (default 1,000,000: well out of cache),
+// SNL_MICRO_DIM the dimension (default 2).
 // Iteration counts are fixed so that every rank runs the same collectives.
 #include <benchmark/benchmark.h>
 #include <mpi.h>
@@ -39,6 +40,8 @@ LocalizationProblem& problem(bool rcm) {
     static Network whole = [] {
       GenerateOptions opt;
       opt.sensors = bench_sensors();
+      const char* dim = std::getenv("SNL_MICRO_DIM");
+      opt.dim = dim ? std::atoi(dim) : 2;
       opt.avg_degree = 6;
       opt.sigma = 0.01;
       opt.localizable = GenerateOptions::Localizable::kNo;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <type_traits>
 
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 #define SNL_HAVE_AVX2_PATH 1
@@ -162,94 +163,143 @@ void mm_chunk_scalar(const LocalizationProblem& prob, const NodeLanes& nl, std::
 }
 
 #ifdef SNL_HAVE_AVX2_PATH
-// ---- AVX2: the node-lane steps with 4 nodes per register. Rows are loaded
-// as (x, y) pairs; after the unpack the lanes hold nodes (0, 2, 1, 3) of the
-// chunk (NodeLanes::lane_node), and per-slot scalars (rho, the lane bits) are
-// stored in that order. Only IEEE add/sub/mul/div/sqrt and no FMA, so every
-// lane equals the scalar twin bit for bit. The kernels return normally (GCC
-// emits vzeroupper there): an earlier tail call from AVX2 code into scalar code
-// got none, and the dirty upper ymm state slowed the caller's SSE code by
-// ~40% (docs/performance.md).
+// Software prefetch of the lane arrays a fixed distance ahead (groups at
+// kPrefetchBytes of ranges): the arrays are read in order, but the hardware
+// prefetcher alone left these sqrt/div-heavy loops waiting on memory. At 1M
+// sensors on one core: relaxation 5.7-6.5 -> 5.2-5.3 ms, MM 8.9-9.7 -> 7.7-8.2
+// ms per iteration (docs/performance.md). The index is clamped to the last
+// group so that no address past the arrays is formed. EdgeP > 0: also MM's
+// edge rows y (EdgeP doubles per lane and group). Always inlined: GCC
+// takes a function that only prefetches for one without side effects and
+// drops calls to it that it did not inline (it did so in the MM kernels).
+constexpr std::int64_t kPrefetchBytes = 2048;
+template <int C, int EdgeP>
+__attribute__((always_inline)) inline void prefetch_group(const NodeLanes& nl, std::int64_t g, std::int64_t last, const double* y) {
+  const std::int64_t ahead = std::min(g + kPrefetchBytes / (8 * C), last);
+  _mm_prefetch(reinterpret_cast<const char*>(nl.rho.data() + C * ahead), _MM_HINT_T0);
+  _mm_prefetch(reinterpret_cast<const char*>(nl.adj.data() + C * ahead), _MM_HINT_T0);
+  for (int j = 0; j < EdgeP * C; j += 8)  // one 64-byte line at a time
+    _mm_prefetch(reinterpret_cast<const char*>(y + EdgeP * C * ahead + j), _MM_HINT_T0);
+}
+
+// ---- AVX2: the node-lane steps with 4 nodes per register, for p = 2 and 3.
+// Rows are loaded as (x, y) pairs (and z alone for p = 3); after the unpack
+// the lanes hold nodes (0, 2, 1, 3) of the chunk (NodeLanes::lane_node), and
+// per-slot scalars (rho, the lane bits) are stored in that order. Only IEEE
+// add/sub/mul/div/sqrt and no FMA, so every lane equals the scalar twin bit
+// for bit. The kernels return normally (GCC emits vzeroupper there): an
+// earlier tail call from AVX2 code into scalar code got none, and the dirty
+// upper ymm state slowed the caller's SSE code by ~40% (docs/performance.md).
 #define SNL_AVX2 __attribute__((target("avx2")))
 
-SNL_AVX2 inline void load_rows(const double* x, const LocalId* idx, __m256d* X, __m256d* Y) {
-  const __m256d a = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(x + std::size_t(idx[0]) * 2)),
-                                         _mm_loadu_pd(x + std::size_t(idx[1]) * 2), 1);
-  const __m256d b = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(x + std::size_t(idx[2]) * 2)),
-                                         _mm_loadu_pd(x + std::size_t(idx[3]) * 2), 1);
-  *X = _mm256_unpacklo_pd(a, b);  // (x0, x2, x1, x3)
-  *Y = _mm256_unpackhi_pd(a, b);
+// Row offsets 0..7, for loading a chunk's own p = 3 rows with the neighbour loads.
+constexpr LocalId kIota[8] = {0, 1, 2, 3, 4, 5, 6, 7};
+
+// Rows idx[0..3] of x (p = P) as P registers in lane order (0, 2, 1, 3).
+template <int P>
+SNL_AVX2 inline void load_rows(const double* x, const LocalId* idx, __m256d* U) {
+  auto row = [&](int q) { return _mm_loadu_pd(x + std::size_t(idx[q]) * P); };
+  const __m256d a = _mm256_insertf128_pd(_mm256_castpd128_pd256(row(0)), row(1), 1);
+  const __m256d b = _mm256_insertf128_pd(_mm256_castpd128_pd256(row(2)), row(3), 1);
+  U[0] = _mm256_unpacklo_pd(a, b);  // (x0, x2, x1, x3)
+  U[1] = _mm256_unpackhi_pd(a, b);
+  if constexpr (P == 3) {
+    auto z = [&](int q) { return _mm_load_sd(x + std::size_t(idx[q]) * 3 + 2); };
+    const __m256d c = _mm256_insertf128_pd(_mm256_castpd128_pd256(z(0)), z(1), 1);
+    const __m256d d = _mm256_insertf128_pd(_mm256_castpd128_pd256(z(2)), z(3), 1);
+    U[2] = _mm256_unpacklo_pd(c, d);
+  }
 }
 
 SNL_AVX2 inline __m256d load_scalars_0213(const double* r) {
   return _mm256_permute4x64_pd(_mm256_loadu_pd(r), _MM_SHUFFLE(3, 1, 2, 0));
 }
 
-SNL_AVX2 inline void store_pairs(double* t, __m256d X, __m256d Y) {
-  _mm256_storeu_pd(t, _mm256_unpacklo_pd(X, Y));      // (x0, y0, x1, y1)
-  _mm256_storeu_pd(t + 4, _mm256_unpackhi_pd(X, Y));  // (x2, y2, x3, y3)
+// The rows of nodes v .. v+3 (contiguous, from r) in the lane order of load_rows.
+template <int P>
+SNL_AVX2 inline void load_own(const double* r, __m256d* U) {
+  if constexpr (P == 2) {
+    const __m256d a = _mm256_loadu_pd(r), b = _mm256_loadu_pd(r + 4);
+    U[0] = _mm256_unpacklo_pd(a, b);
+    U[1] = _mm256_unpackhi_pd(a, b);
+  } else {
+    load_rows<P>(r, kIota, U);
+  }
 }
 
-// store_pairs with non-temporal stores (see stream_pairs8).
-SNL_AVX2 inline void stream_pairs(double* t, __m256d X, __m256d Y) {
-  const __m256d lo = _mm256_unpacklo_pd(X, Y), hi = _mm256_unpackhi_pd(X, Y);
-  _mm_stream_pd(t, _mm256_castpd256_pd128(lo));
-  _mm_stream_pd(t + 2, _mm256_extractf128_pd(lo, 1));
-  _mm_stream_pd(t + 4, _mm256_castpd256_pd128(hi));
-  _mm_stream_pd(t + 6, _mm256_extractf128_pd(hi, 1));
+// The inverse of load_own. p = 2 rows may go out with non-temporal stores
+// (stream_rows: the lines are not read for ownership first); p = 3 rows
+// (24 bytes, not always 16-byte aligned) are always stored plainly.
+template <int P>
+SNL_AVX2 inline void store_own(double* t, const __m256d* U, bool stream) {
+  if constexpr (P == 2) {
+    const __m256d lo = _mm256_unpacklo_pd(U[0], U[1]), hi = _mm256_unpackhi_pd(U[0], U[1]);
+    if (stream) {
+      _mm_stream_pd(t, _mm256_castpd256_pd128(lo));
+      _mm_stream_pd(t + 2, _mm256_extractf128_pd(lo, 1));
+      _mm_stream_pd(t + 4, _mm256_castpd256_pd128(hi));
+      _mm_stream_pd(t + 6, _mm256_extractf128_pd(hi, 1));
+    } else {
+      _mm256_storeu_pd(t, lo);      // (x0, y0, x1, y1)
+      _mm256_storeu_pd(t + 4, hi);  // (x2, y2, x3, y3)
+    }
+  } else {
+    alignas(32) double lanes[P][4];
+    for (int k = 0; k < P; ++k) _mm256_store_pd(lanes[k], U[k]);
+    for (int q = 0; q < 4; ++q)
+      for (int k = 0; k < P; ++k) t[P * q + k] = lanes[k][NodeLanes::lane_of_node(q, 4)];
+  }
 }
 
-// Rows v .. v+3 (contiguous) as (x, y) registers in the lane order of load_rows.
-SNL_AVX2 inline void load_pairs(const double* r, __m256d* X, __m256d* Y) {
-  const __m256d a = _mm256_loadu_pd(r), b = _mm256_loadu_pd(r + 4);
-  *X = _mm256_unpacklo_pd(a, b);
-  *Y = _mm256_unpackhi_pd(a, b);
+// sum_k U[k]^2 in coordinate order (the scalar twins' order).
+SNL_AVX2 inline __m256d square_sum(const __m256d* U, int P) {
+  __m256d s = _mm256_mul_pd(U[0], U[0]);
+  for (int k = 1; k < P; ++k) s = _mm256_add_pd(s, _mm256_mul_pd(U[k], U[k]));
+  return s;
 }
 
-// Node-lane relaxation step, 4 nodes per register (full chunks only): the
-// lanes hold nodes (0, 2, 1, 3) of the chunk, the order load_rows gives.
+// Node-lane relaxation step, 4 nodes per register (full chunks only).
+template <int P>
 SNL_AVX2 void relax_chunks_avx2(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0,
                                 std::int64_t c1, const RelaxStep& s) {
   const __m256d one = _mm256_set1_pd(1.0), vL = _mm256_set1_pd(s.L), vb = _mm256_set1_pd(s.beta);
   __m256d DD = load_scalars_0213(s.norms), SS = load_scalars_0213(s.norms + 4), GS = load_scalars_0213(s.norms + 8);
+  const std::int64_t last = nl.groups() - 1;
   for (std::int64_t c = c0; c < c1; ++c) {
     const LocalId v0 = nl.first[c];
-    const std::size_t i0 = std::size_t(v0) * 2;
-    __m256d WX, WY;
-    load_pairs(s.w + i0, &WX, &WY);
-    __m256d AX = _mm256_setzero_pd(), AY = _mm256_setzero_pd();
+    const std::size_t i0 = std::size_t(v0) * P;
+    __m256d W[P], A[P];
+    load_own<P>(s.w + i0, W);
+    for (int k = 0; k < P; ++k) A[k] = _mm256_setzero_pd();
     for (std::int64_t g = nl.group_off[c]; g < nl.group_off[c + 1]; ++g) {
-      __m256d UX, UY;
-      load_rows(s.w, nl.adj.data() + 4 * g, &UX, &UY);
+      prefetch_group<4, 0>(nl, g, last, nullptr);
+      __m256d z[P];
+      load_rows<P>(s.w, nl.adj.data() + 4 * g, z);
       const __m256d r = _mm256_loadu_pd(nl.rho.data() + 4 * g);
-      const __m256d z0 = _mm256_sub_pd(WX, UX), z1 = _mm256_sub_pd(WY, UY);
-      const __m256d nz = _mm256_sqrt_pd(_mm256_add_pd(_mm256_mul_pd(z0, z0), _mm256_mul_pd(z1, z1)));
+      for (int k = 0; k < P; ++k) z[k] = _mm256_sub_pd(W[k], z[k]);
+      const __m256d nz = _mm256_sqrt_pd(square_sum(z, P));
       const __m256d mask = _mm256_cmp_pd(nz, r, _CMP_GT_OQ);
       const __m256d cf = _mm256_sub_pd(one, _mm256_div_pd(r, nz));
-      AX = _mm256_add_pd(AX, _mm256_and_pd(_mm256_mul_pd(cf, z0), mask));
-      AY = _mm256_add_pd(AY, _mm256_and_pd(_mm256_mul_pd(cf, z1), mask));
+      for (int k = 0; k < P; ++k) A[k] = _mm256_add_pd(A[k], _mm256_and_pd(_mm256_mul_pd(cf, z[k]), mask));
     }
     if (nl.has_anchor[c]) {  // rare at scale: through memory, one node at a time
-      alignas(32) double tmp[8];
-      store_pairs(tmp, AX, AY);
-      for (int q = 0; q < 4; ++q) add_anchor_disk_terms(prob, v0 + q, s.w + i0 + 2 * q, tmp + 2 * q);
-      load_pairs(tmp, &AX, &AY);
+      alignas(32) double tmp[4 * P];
+      store_own<P>(tmp, A, false);
+      for (int q = 0; q < 4; ++q) add_anchor_disk_terms(prob, v0 + q, s.w + i0 + P * q, tmp + P * q);
+      load_own<P>(tmp, A);
     }
-    __m256d XX, XY;
-    load_pairs(s.x + i0, &XX, &XY);
-    const __m256d NX = _mm256_sub_pd(WX, _mm256_div_pd(AX, vL)), NY = _mm256_sub_pd(WY, _mm256_div_pd(AY, vL));
-    const __m256d DX = _mm256_sub_pd(NX, XX), DY = _mm256_sub_pd(NY, XY);
-    const __m256d WNX = _mm256_add_pd(NX, _mm256_mul_pd(vb, DX)), WNY = _mm256_add_pd(NY, _mm256_mul_pd(vb, DY));
-    if (s.stream) {
-      stream_pairs(s.xn + i0, NX, NY);
-      stream_pairs(s.wn + i0, WNX, WNY);
-    } else {
-      store_pairs(s.xn + i0, NX, NY);
-      store_pairs(s.wn + i0, WNX, WNY);
+    __m256d X[P], N[P], D[P], WN[P];
+    load_own<P>(s.x + i0, X);
+    for (int k = 0; k < P; ++k) {
+      N[k] = _mm256_sub_pd(W[k], _mm256_div_pd(A[k], vL));
+      D[k] = _mm256_sub_pd(N[k], X[k]);
+      WN[k] = _mm256_add_pd(N[k], _mm256_mul_pd(vb, D[k]));
     }
-    DD = _mm256_add_pd(_mm256_add_pd(DD, _mm256_mul_pd(DX, DX)), _mm256_mul_pd(DY, DY));
-    SS = _mm256_add_pd(_mm256_add_pd(SS, _mm256_mul_pd(NX, NX)), _mm256_mul_pd(NY, NY));
-    GS = _mm256_add_pd(_mm256_add_pd(GS, _mm256_mul_pd(AX, AX)), _mm256_mul_pd(AY, AY));
+    store_own<P>(s.xn + i0, N, s.stream);
+    store_own<P>(s.wn + i0, WN, s.stream);
+    for (int k = 0; k < P; ++k) DD = _mm256_add_pd(DD, _mm256_mul_pd(D[k], D[k]));
+    for (int k = 0; k < P; ++k) SS = _mm256_add_pd(SS, _mm256_mul_pd(N[k], N[k]));
+    for (int k = 0; k < P; ++k) GS = _mm256_add_pd(GS, _mm256_mul_pd(A[k], A[k]));
   }
   // (0, 2, 1, 3) is its own inverse.
   _mm256_storeu_pd(s.norms, _mm256_permute4x64_pd(DD, _MM_SHUFFLE(3, 1, 2, 0)));
@@ -265,61 +315,63 @@ SNL_AVX2 inline __m256d lane_mask4(unsigned bits) {
 }
 
 // Node-lane MM step, 4 nodes per register (full chunks only).
+template <int P>
 SNL_AVX2 void mm_chunks_avx2(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
                              const MMStep& s) {
   const __m256d one = _mm256_set1_pd(1.0), minus_one = _mm256_set1_pd(-1.0), zero = _mm256_setzero_pd();
   const __m256d vkeep = _mm256_set1_pd(s.keep), vinvL = _mm256_set1_pd(s.invL);
   __m256d DD = load_scalars_0213(s.norms), SS = load_scalars_0213(s.norms + 4);
+  const std::int64_t last = nl.groups() - 1;
   for (std::int64_t c = c0; c < c1; ++c) {
     const LocalId v0 = nl.first[c];
-    const std::size_t i0 = std::size_t(v0) * 2;
-    __m256d VX, VY;
-    load_pairs(s.x + i0, &VX, &VY);
-    __m256d AX = _mm256_setzero_pd(), AY = _mm256_setzero_pd();
+    const std::size_t i0 = std::size_t(v0) * P;
+    __m256d V[P], A[P];
+    load_own<P>(s.x + i0, V);
+    for (int k = 0; k < P; ++k) A[k] = _mm256_setzero_pd();
     for (std::int64_t g = nl.group_off[c]; g < nl.group_off[c + 1]; ++g) {
-      __m256d UX, UY;
-      load_rows(s.x, nl.adj.data() + 4 * g, &UX, &UY);
+      prefetch_group<4, P>(nl, g, last, s.y);
+      __m256d U[P], dz[P], yn[P];
+      load_rows<P>(s.x, nl.adj.data() + 4 * g, U);
       const __m256d r = _mm256_loadu_pd(nl.rho.data() + 4 * g);
       const __m256d re = lane_mask4(nl.real[g]), fw = lane_mask4(nl.fwd[g]);
-      // dz = x_i - x_j in the edge's orientation (both differences, selected,
-      // so that signed zeros match the scalar form).
-      const __m256d dz0 = _mm256_blendv_pd(_mm256_sub_pd(UX, VX), _mm256_sub_pd(VX, UX), fw);
-      const __m256d dz1 = _mm256_blendv_pd(_mm256_sub_pd(UY, VY), _mm256_sub_pd(VY, UY), fw);
-      double* yg = s.y + 8 * g;
-      const __m256d YX = _mm256_loadu_pd(yg), YY = _mm256_loadu_pd(yg + 4);
       const __m256d sgn = _mm256_blendv_pd(minus_one, one, fw);
-      AX = _mm256_add_pd(AX, _mm256_and_pd(_mm256_mul_pd(sgn, _mm256_sub_pd(dz0, YX)), re));
-      AY = _mm256_add_pd(AY, _mm256_and_pd(_mm256_mul_pd(sgn, _mm256_sub_pd(dz1, YY)), re));
-      const __m256d y0 = _mm256_add_pd(_mm256_mul_pd(vkeep, YX), _mm256_mul_pd(vinvL, dz0));
-      const __m256d y1 = _mm256_add_pd(_mm256_mul_pd(vkeep, YY), _mm256_mul_pd(vinvL, dz1));
-      const __m256d nv = _mm256_sqrt_pd(_mm256_add_pd(_mm256_mul_pd(y0, y0), _mm256_mul_pd(y1, y1)));
+      double* yg = s.y + 4 * P * g;
+      for (int k = 0; k < P; ++k) {
+        // dz = x_i - x_j in the edge's orientation (both differences,
+        // selected, so that signed zeros match the scalar form).
+        dz[k] = _mm256_blendv_pd(_mm256_sub_pd(U[k], V[k]), _mm256_sub_pd(V[k], U[k]), fw);
+        const __m256d Y = _mm256_loadu_pd(yg + 4 * k);
+        A[k] = _mm256_add_pd(A[k], _mm256_and_pd(_mm256_mul_pd(sgn, _mm256_sub_pd(dz[k], Y)), re));
+        yn[k] = _mm256_add_pd(_mm256_mul_pd(vkeep, Y), _mm256_mul_pd(vinvL, dz[k]));
+      }
+      const __m256d nv = _mm256_sqrt_pd(square_sum(yn, P));
       const __m256d pos = _mm256_cmp_pd(nv, zero, _CMP_GT_OQ);
       const __m256d f = _mm256_div_pd(r, nv);
-      _mm256_storeu_pd(yg, _mm256_blendv_pd(r, _mm256_mul_pd(y0, f), pos));
-      _mm256_storeu_pd(yg + 4, _mm256_blendv_pd(zero, _mm256_mul_pd(y1, f), pos));
+      for (int k = 0; k < P; ++k)  // P_sphere(0) = rho e_1
+        _mm256_storeu_pd(yg + 4 * k, _mm256_blendv_pd(k == 0 ? r : zero, _mm256_mul_pd(yn[k], f), pos));
     }
     if (nl.has_anchor[c]) {
-      alignas(32) double tmp[8];
-      store_pairs(tmp, AX, AY);
+      alignas(32) double tmp[4 * P];
+      store_own<P>(tmp, A, false);
       for (int q = 0; q < 4; ++q)
-        add_anchor_mm_terms<2>(prob, v0 + q, s.x + i0 + 2 * q, s.keep, s.invL, s.aw, tmp + 2 * q);
-      load_pairs(tmp, &AX, &AY);
+        add_anchor_mm_terms<P>(prob, v0 + q, s.x + i0 + P * q, s.keep, s.invL, s.aw, tmp + P * q);
+      load_own<P>(tmp, A);
     }
-    const __m256d XX = _mm256_sub_pd(VX, _mm256_mul_pd(vinvL, AX)), XY = _mm256_sub_pd(VY, _mm256_mul_pd(vinvL, AY));
-    const __m256d DX = _mm256_sub_pd(XX, VX), DY = _mm256_sub_pd(XY, VY);
-    if (s.stream)
-      stream_pairs(s.xn + i0, XX, XY);
-    else
-      store_pairs(s.xn + i0, XX, XY);
-    DD = _mm256_add_pd(_mm256_add_pd(DD, _mm256_mul_pd(DX, DX)), _mm256_mul_pd(DY, DY));
-    SS = _mm256_add_pd(_mm256_add_pd(SS, _mm256_mul_pd(XX, XX)), _mm256_mul_pd(XY, XY));
+    __m256d X[P], D[P];
+    for (int k = 0; k < P; ++k) {
+      X[k] = _mm256_sub_pd(V[k], _mm256_mul_pd(vinvL, A[k]));
+      D[k] = _mm256_sub_pd(X[k], V[k]);
+    }
+    store_own<P>(s.xn + i0, X, s.stream);
+    for (int k = 0; k < P; ++k) DD = _mm256_add_pd(DD, _mm256_mul_pd(D[k], D[k]));
+    for (int k = 0; k < P; ++k) SS = _mm256_add_pd(SS, _mm256_mul_pd(X[k], X[k]));
   }
   _mm256_storeu_pd(s.norms, _mm256_permute4x64_pd(DD, _MM_SHUFFLE(3, 1, 2, 0)));
   _mm256_storeu_pd(s.norms + 4, _mm256_permute4x64_pd(SS, _MM_SHUFFLE(3, 1, 2, 0)));
   _mm_sfence();
 }
 
-// ---- AVX-512: the same node-lane step with 8 nodes per register. Lanes
+// ---- AVX-512: the same node-lane steps with 8 nodes per register. Lanes
 // hold nodes (0, 4, 1, 5, 2, 6, 3, 7) of the chunk (NodeLanes::lane_node).
 // A lane whose slot is inside its disk is left as it is by a masked add,
 // which is the scalar form's "+ (+0.0)" (the sum is never -0.0).
@@ -330,8 +382,10 @@ SNL_AVX2 void mm_chunks_avx2(const LocalizationProblem& prob, const NodeLanes& n
 #pragma GCC diagnostic ignored "-Wuninitialized"
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 
-SNL_AVX512 inline void load_rows8(const double* x, const LocalId* idx, __m512d* X, __m512d* Y) {
-  auto row = [&](int q) { return _mm_loadu_pd(x + std::size_t(idx[q]) * 2); };
+// Rows idx[0..7] of x (p = P) as P registers in lane order (0, 4, 1, 5, ...).
+template <int P>
+SNL_AVX512 inline void load_rows8(const double* x, const LocalId* idx, __m512d* U) {
+  auto row = [&](int q) { return _mm_loadu_pd(x + std::size_t(idx[q]) * P); };
   __m512d a = _mm512_castpd128_pd512(row(0)), b = _mm512_castpd128_pd512(row(4));
   a = _mm512_insertf64x2(a, row(1), 1);
   b = _mm512_insertf64x2(b, row(5), 1);
@@ -339,34 +393,56 @@ SNL_AVX512 inline void load_rows8(const double* x, const LocalId* idx, __m512d* 
   b = _mm512_insertf64x2(b, row(6), 2);
   a = _mm512_insertf64x2(a, row(3), 3);
   b = _mm512_insertf64x2(b, row(7), 3);
-  *X = _mm512_unpacklo_pd(a, b);
-  *Y = _mm512_unpackhi_pd(a, b);
+  U[0] = _mm512_unpacklo_pd(a, b);
+  U[1] = _mm512_unpackhi_pd(a, b);
+  if constexpr (P == 3) {
+    auto z = [&](int q) { return _mm_load_sd(x + std::size_t(idx[q]) * 3 + 2); };
+    __m512d c = _mm512_castpd128_pd512(z(0)), d = _mm512_castpd128_pd512(z(4));
+    c = _mm512_insertf64x2(c, z(1), 1);
+    d = _mm512_insertf64x2(d, z(5), 1);
+    c = _mm512_insertf64x2(c, z(2), 2);
+    d = _mm512_insertf64x2(d, z(6), 2);
+    c = _mm512_insertf64x2(c, z(3), 3);
+    d = _mm512_insertf64x2(d, z(7), 3);
+    U[2] = _mm512_unpacklo_pd(c, d);
+  }
 }
 
-SNL_AVX512 inline void load_pairs8(const double* r, __m512d* X, __m512d* Y) {
-  const __m512d a = _mm512_loadu_pd(r), b = _mm512_loadu_pd(r + 8);
-  *X = _mm512_unpacklo_pd(a, b);
-  *Y = _mm512_unpackhi_pd(a, b);
+template <int P>
+SNL_AVX512 inline void load_own8(const double* r, __m512d* U) {
+  if constexpr (P == 2) {
+    const __m512d a = _mm512_loadu_pd(r), b = _mm512_loadu_pd(r + 8);
+    U[0] = _mm512_unpacklo_pd(a, b);
+    U[1] = _mm512_unpackhi_pd(a, b);
+  } else {
+    load_rows8<P>(r, kIota, U);
+  }
 }
 
-SNL_AVX512 inline void store_pairs8(double* t, __m512d X, __m512d Y) {
-  _mm512_storeu_pd(t, _mm512_unpacklo_pd(X, Y));      // nodes 0..3
-  _mm512_storeu_pd(t + 8, _mm512_unpackhi_pd(X, Y));  // nodes 4..7
-}
-
-// store_pairs8 with non-temporal stores (16-byte alignment, which
-// std::vector's storage has), for arrays that do not stay in cache from one
-// iteration to the next: the lines written are not read for ownership first.
-SNL_AVX512 inline void stream_pairs8(double* t, __m512d X, __m512d Y) {
-  const __m512d lo = _mm512_unpacklo_pd(X, Y), hi = _mm512_unpackhi_pd(X, Y);
-  _mm_stream_pd(t, _mm512_castpd512_pd128(lo));
-  _mm_stream_pd(t + 2, _mm512_extractf64x2_pd(lo, 1));
-  _mm_stream_pd(t + 4, _mm512_extractf64x2_pd(lo, 2));
-  _mm_stream_pd(t + 6, _mm512_extractf64x2_pd(lo, 3));
-  _mm_stream_pd(t + 8, _mm512_castpd512_pd128(hi));
-  _mm_stream_pd(t + 10, _mm512_extractf64x2_pd(hi, 1));
-  _mm_stream_pd(t + 12, _mm512_extractf64x2_pd(hi, 2));
-  _mm_stream_pd(t + 14, _mm512_extractf64x2_pd(hi, 3));
+// The inverse of load_own8; non-temporal stores for p = 2 only (see store_own).
+template <int P>
+SNL_AVX512 inline void store_own8(double* t, const __m512d* U, bool stream) {
+  if constexpr (P == 2) {
+    const __m512d lo = _mm512_unpacklo_pd(U[0], U[1]), hi = _mm512_unpackhi_pd(U[0], U[1]);
+    if (stream) {
+      _mm_stream_pd(t, _mm512_castpd512_pd128(lo));
+      _mm_stream_pd(t + 2, _mm512_extractf64x2_pd(lo, 1));
+      _mm_stream_pd(t + 4, _mm512_extractf64x2_pd(lo, 2));
+      _mm_stream_pd(t + 6, _mm512_extractf64x2_pd(lo, 3));
+      _mm_stream_pd(t + 8, _mm512_castpd512_pd128(hi));
+      _mm_stream_pd(t + 10, _mm512_extractf64x2_pd(hi, 1));
+      _mm_stream_pd(t + 12, _mm512_extractf64x2_pd(hi, 2));
+      _mm_stream_pd(t + 14, _mm512_extractf64x2_pd(hi, 3));
+    } else {
+      _mm512_storeu_pd(t, lo);      // nodes 0..3
+      _mm512_storeu_pd(t + 8, hi);  // nodes 4..7
+    }
+  } else {
+    alignas(64) double lanes[P][8];
+    for (int k = 0; k < P; ++k) _mm512_store_pd(lanes[k], U[k]);
+    for (int q = 0; q < 8; ++q)
+      for (int k = 0; k < P; ++k) t[P * q + k] = lanes[k][NodeLanes::lane_of_node(q, 8)];
+  }
 }
 
 // Lane sums <-> per-node-offset arrays.
@@ -377,48 +453,53 @@ SNL_AVX512 inline void store_lanes8(double* q, __m512d v) {
   _mm512_storeu_pd(q, _mm512_permutexvar_pd(_mm512_setr_epi64(0, 2, 4, 6, 1, 3, 5, 7), v));
 }
 
+SNL_AVX512 inline __m512d square_sum8(const __m512d* U, int P) {
+  __m512d s = _mm512_mul_pd(U[0], U[0]);
+  for (int k = 1; k < P; ++k) s = _mm512_add_pd(s, _mm512_mul_pd(U[k], U[k]));
+  return s;
+}
+
+template <int P>
 SNL_AVX512 void relax_chunks_avx512(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0,
                                     std::int64_t c1, const RelaxStep& s) {
   const __m512d one = _mm512_set1_pd(1.0), vL = _mm512_set1_pd(s.L), vb = _mm512_set1_pd(s.beta);
   __m512d DD = load_lanes8(s.norms), SS = load_lanes8(s.norms + 8), GS = load_lanes8(s.norms + 16);
+  const std::int64_t last = nl.groups() - 1;
   for (std::int64_t c = c0; c < c1; ++c) {
     const LocalId v0 = nl.first[c];
-    const std::size_t i0 = std::size_t(v0) * 2;
-    __m512d WX, WY;
-    load_pairs8(s.w + i0, &WX, &WY);
-    __m512d AX = _mm512_setzero_pd(), AY = _mm512_setzero_pd();
+    const std::size_t i0 = std::size_t(v0) * P;
+    __m512d W[P], A[P];
+    load_own8<P>(s.w + i0, W);
+    for (int k = 0; k < P; ++k) A[k] = _mm512_setzero_pd();
     for (std::int64_t g = nl.group_off[c]; g < nl.group_off[c + 1]; ++g) {
-      __m512d UX, UY;
-      load_rows8(s.w, nl.adj.data() + 8 * g, &UX, &UY);
+      prefetch_group<8, 0>(nl, g, last, nullptr);
+      __m512d z[P];
+      load_rows8<P>(s.w, nl.adj.data() + 8 * g, z);
       const __m512d r = _mm512_loadu_pd(nl.rho.data() + 8 * g);
-      const __m512d z0 = _mm512_sub_pd(WX, UX), z1 = _mm512_sub_pd(WY, UY);
-      const __m512d nz = _mm512_sqrt_pd(_mm512_add_pd(_mm512_mul_pd(z0, z0), _mm512_mul_pd(z1, z1)));
+      for (int k = 0; k < P; ++k) z[k] = _mm512_sub_pd(W[k], z[k]);
+      const __m512d nz = _mm512_sqrt_pd(square_sum8(z, P));
       const __mmask8 out = _mm512_cmp_pd_mask(nz, r, _CMP_GT_OQ);
       const __m512d cf = _mm512_sub_pd(one, _mm512_div_pd(r, nz));
-      AX = _mm512_mask_add_pd(AX, out, AX, _mm512_mul_pd(cf, z0));
-      AY = _mm512_mask_add_pd(AY, out, AY, _mm512_mul_pd(cf, z1));
+      for (int k = 0; k < P; ++k) A[k] = _mm512_mask_add_pd(A[k], out, A[k], _mm512_mul_pd(cf, z[k]));
     }
     if (nl.has_anchor[c]) {
-      alignas(64) double tmp[16];
-      store_pairs8(tmp, AX, AY);
-      for (int q = 0; q < 8; ++q) add_anchor_disk_terms(prob, v0 + q, s.w + i0 + 2 * q, tmp + 2 * q);
-      load_pairs8(tmp, &AX, &AY);
+      alignas(64) double tmp[8 * P];
+      store_own8<P>(tmp, A, false);
+      for (int q = 0; q < 8; ++q) add_anchor_disk_terms(prob, v0 + q, s.w + i0 + P * q, tmp + P * q);
+      load_own8<P>(tmp, A);
     }
-    __m512d XX, XY;
-    load_pairs8(s.x + i0, &XX, &XY);
-    const __m512d NX = _mm512_sub_pd(WX, _mm512_div_pd(AX, vL)), NY = _mm512_sub_pd(WY, _mm512_div_pd(AY, vL));
-    const __m512d DX = _mm512_sub_pd(NX, XX), DY = _mm512_sub_pd(NY, XY);
-    const __m512d WNX = _mm512_add_pd(NX, _mm512_mul_pd(vb, DX)), WNY = _mm512_add_pd(NY, _mm512_mul_pd(vb, DY));
-    if (s.stream) {
-      stream_pairs8(s.xn + i0, NX, NY);
-      stream_pairs8(s.wn + i0, WNX, WNY);
-    } else {
-      store_pairs8(s.xn + i0, NX, NY);
-      store_pairs8(s.wn + i0, WNX, WNY);
+    __m512d X[P], N[P], D[P], WN[P];
+    load_own8<P>(s.x + i0, X);
+    for (int k = 0; k < P; ++k) {
+      N[k] = _mm512_sub_pd(W[k], _mm512_div_pd(A[k], vL));
+      D[k] = _mm512_sub_pd(N[k], X[k]);
+      WN[k] = _mm512_add_pd(N[k], _mm512_mul_pd(vb, D[k]));
     }
-    DD = _mm512_add_pd(_mm512_add_pd(DD, _mm512_mul_pd(DX, DX)), _mm512_mul_pd(DY, DY));
-    SS = _mm512_add_pd(_mm512_add_pd(SS, _mm512_mul_pd(NX, NX)), _mm512_mul_pd(NY, NY));
-    GS = _mm512_add_pd(_mm512_add_pd(GS, _mm512_mul_pd(AX, AX)), _mm512_mul_pd(AY, AY));
+    store_own8<P>(s.xn + i0, N, s.stream);
+    store_own8<P>(s.wn + i0, WN, s.stream);
+    for (int k = 0; k < P; ++k) DD = _mm512_add_pd(DD, _mm512_mul_pd(D[k], D[k]));
+    for (int k = 0; k < P; ++k) SS = _mm512_add_pd(SS, _mm512_mul_pd(N[k], N[k]));
+    for (int k = 0; k < P; ++k) GS = _mm512_add_pd(GS, _mm512_mul_pd(A[k], A[k]));
   }
   store_lanes8(s.norms, DD);
   store_lanes8(s.norms + 8, SS);
@@ -426,54 +507,55 @@ SNL_AVX512 void relax_chunks_avx512(const LocalizationProblem& prob, const NodeL
   _mm_sfence();  // order the non-temporal stores before what follows
 }
 
+template <int P>
 SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0,
                                  std::int64_t c1, const MMStep& s) {
   const __m512d minus_one = _mm512_set1_pd(-1.0), zero = _mm512_setzero_pd();
   const __m512d vkeep = _mm512_set1_pd(s.keep), vinvL = _mm512_set1_pd(s.invL);
   __m512d DD = load_lanes8(s.norms), SS = load_lanes8(s.norms + 8);
+  const std::int64_t last = nl.groups() - 1;
   for (std::int64_t c = c0; c < c1; ++c) {
     const LocalId v0 = nl.first[c];
-    const std::size_t i0 = std::size_t(v0) * 2;
-    __m512d VX, VY;
-    load_pairs8(s.x + i0, &VX, &VY);
-    __m512d AX = _mm512_setzero_pd(), AY = _mm512_setzero_pd();
+    const std::size_t i0 = std::size_t(v0) * P;
+    __m512d V[P], A[P];
+    load_own8<P>(s.x + i0, V);
+    for (int k = 0; k < P; ++k) A[k] = _mm512_setzero_pd();
     for (std::int64_t g = nl.group_off[c]; g < nl.group_off[c + 1]; ++g) {
-      __m512d UX, UY;
-      load_rows8(s.x, nl.adj.data() + 8 * g, &UX, &UY);
+      prefetch_group<8, P>(nl, g, last, s.y);
+      __m512d U[P], dz[P], yn[P];
+      load_rows8<P>(s.x, nl.adj.data() + 8 * g, U);
       const __m512d r = _mm512_loadu_pd(nl.rho.data() + 8 * g);
       const __mmask8 re = nl.real[g], fw = nl.fwd[g], bw = static_cast<__mmask8>(~fw);
-      const __m512d dz0 = _mm512_mask_sub_pd(_mm512_sub_pd(UX, VX), fw, VX, UX);
-      const __m512d dz1 = _mm512_mask_sub_pd(_mm512_sub_pd(UY, VY), fw, VY, UY);
-      double* yg = s.y + 16 * g;
-      const __m512d YX = _mm512_loadu_pd(yg), YY = _mm512_loadu_pd(yg + 8);
-      __m512d t0 = _mm512_sub_pd(dz0, YX), t1 = _mm512_sub_pd(dz1, YY);
-      t0 = _mm512_mask_mul_pd(t0, bw, t0, minus_one);  // sgn (dz - y): 1.0 * t is t
-      t1 = _mm512_mask_mul_pd(t1, bw, t1, minus_one);
-      AX = _mm512_mask_add_pd(AX, re, AX, t0);
-      AY = _mm512_mask_add_pd(AY, re, AY, t1);
-      const __m512d y0 = _mm512_add_pd(_mm512_mul_pd(vkeep, YX), _mm512_mul_pd(vinvL, dz0));
-      const __m512d y1 = _mm512_add_pd(_mm512_mul_pd(vkeep, YY), _mm512_mul_pd(vinvL, dz1));
-      const __m512d nv = _mm512_sqrt_pd(_mm512_add_pd(_mm512_mul_pd(y0, y0), _mm512_mul_pd(y1, y1)));
+      double* yg = s.y + 8 * P * g;
+      for (int k = 0; k < P; ++k) {
+        dz[k] = _mm512_mask_sub_pd(_mm512_sub_pd(U[k], V[k]), fw, V[k], U[k]);
+        const __m512d Y = _mm512_loadu_pd(yg + 8 * k);
+        __m512d t = _mm512_sub_pd(dz[k], Y);
+        t = _mm512_mask_mul_pd(t, bw, t, minus_one);  // sgn (dz - y): 1.0 * t is t
+        A[k] = _mm512_mask_add_pd(A[k], re, A[k], t);
+        yn[k] = _mm512_add_pd(_mm512_mul_pd(vkeep, Y), _mm512_mul_pd(vinvL, dz[k]));
+      }
+      const __m512d nv = _mm512_sqrt_pd(square_sum8(yn, P));
       const __mmask8 pos = _mm512_cmp_pd_mask(nv, zero, _CMP_GT_OQ);
       const __m512d f = _mm512_div_pd(r, nv);
-      _mm512_storeu_pd(yg, _mm512_mask_mul_pd(r, pos, y0, f));
-      _mm512_storeu_pd(yg + 8, _mm512_mask_mul_pd(zero, pos, y1, f));
+      for (int k = 0; k < P; ++k)  // P_sphere(0) = rho e_1
+        _mm512_storeu_pd(yg + 8 * k, _mm512_mask_mul_pd(k == 0 ? r : zero, pos, yn[k], f));
     }
     if (nl.has_anchor[c]) {
-      alignas(64) double tmp[16];
-      store_pairs8(tmp, AX, AY);
+      alignas(64) double tmp[8 * P];
+      store_own8<P>(tmp, A, false);
       for (int q = 0; q < 8; ++q)
-        add_anchor_mm_terms<2>(prob, v0 + q, s.x + i0 + 2 * q, s.keep, s.invL, s.aw, tmp + 2 * q);
-      load_pairs8(tmp, &AX, &AY);
+        add_anchor_mm_terms<P>(prob, v0 + q, s.x + i0 + P * q, s.keep, s.invL, s.aw, tmp + P * q);
+      load_own8<P>(tmp, A);
     }
-    const __m512d XX = _mm512_sub_pd(VX, _mm512_mul_pd(vinvL, AX)), XY = _mm512_sub_pd(VY, _mm512_mul_pd(vinvL, AY));
-    const __m512d DX = _mm512_sub_pd(XX, VX), DY = _mm512_sub_pd(XY, VY);
-    if (s.stream)
-      stream_pairs8(s.xn + i0, XX, XY);
-    else
-      store_pairs8(s.xn + i0, XX, XY);
-    DD = _mm512_add_pd(_mm512_add_pd(DD, _mm512_mul_pd(DX, DX)), _mm512_mul_pd(DY, DY));
-    SS = _mm512_add_pd(_mm512_add_pd(SS, _mm512_mul_pd(XX, XX)), _mm512_mul_pd(XY, XY));
+    __m512d X[P], D[P];
+    for (int k = 0; k < P; ++k) {
+      X[k] = _mm512_sub_pd(V[k], _mm512_mul_pd(vinvL, A[k]));
+      D[k] = _mm512_sub_pd(X[k], V[k]);
+    }
+    store_own8<P>(s.xn + i0, X, s.stream);
+    for (int k = 0; k < P; ++k) DD = _mm512_add_pd(DD, _mm512_mul_pd(D[k], D[k]));
+    for (int k = 0; k < P; ++k) SS = _mm512_add_pd(SS, _mm512_mul_pd(X[k], X[k]));
   }
   store_lanes8(s.norms, DD);
   store_lanes8(s.norms + 8, SS);
@@ -583,36 +665,46 @@ void NodeLanes::build(const LocalizationProblem& prob) {
 namespace {
 
 // Chunks [c0, c1) of one part: the full ones through the SIMD kernel of the
-// layout's lane width where the CPU allows it (p = 2), the rest (the part's
-// partial last chunk; everything for p = 3 or without SIMD) through the
-// scalar twin. Kernel is a tag with the three functions as static members.
+// layout's lane width where the CPU allows it, the rest (the part's partial
+// last chunk; everything without SIMD) through the scalar twin. Kernel is a
+// tag with the three functions as static members.
 template <class Kernel, class Step>
 void run_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
                 const Step& s) {
   if (c0 >= c1) return;
-  const int p = prob.dim();
   const std::int64_t full = nl.count[c1 - 1] == nl.lanes ? c1 : c1 - 1;
+  auto run = [&](auto dim) {
+    constexpr int P = decltype(dim)::value;
 #ifdef SNL_HAVE_AVX2_PATH
-  if (p == 2 && g_level == 2 && nl.lanes == 8) {
-    Kernel::avx512(prob, nl, c0, full, s);
-    c0 = full;
-  } else if (p == 2 && g_level >= 1 && nl.lanes == 4) {
-    Kernel::avx2(prob, nl, c0, full, s);
-    c0 = full;
-  }
+    if (g_level == 2 && nl.lanes == 8) {
+      Kernel::template avx512<P>(prob, nl, c0, full, s);
+      c0 = full;
+    } else if (g_level >= 1 && nl.lanes == 4) {
+      Kernel::template avx2<P>(prob, nl, c0, full, s);
+      c0 = full;
+    }
 #endif
-  for (std::int64_t c = c0; c < c1; ++c) {
-    if (p == 2)
-      Kernel::template scalar<2>(prob, nl, c, s);
-    else
-      Kernel::template scalar<3>(prob, nl, c, s);
-  }
+    for (std::int64_t c = c0; c < c1; ++c) Kernel::template scalar<P>(prob, nl, c, s);
+  };
+  if (prob.dim() == 2)
+    run(std::integral_constant<int, 2>{});
+  else
+    run(std::integral_constant<int, 3>{});
 }
 
+// Tags naming the three paths of each step for run_chunks.
 struct RelaxKernels {
 #ifdef SNL_HAVE_AVX2_PATH
-  static constexpr auto avx512 = relax_chunks_avx512;
-  static constexpr auto avx2 = relax_chunks_avx2;
+  template <int P>
+  static void avx512(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
+                     const RelaxStep& s) {
+    relax_chunks_avx512<P>(prob, nl, c0, c1, s);
+  }
+  template <int P>
+  static void avx2(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
+                   const RelaxStep& s) {
+    relax_chunks_avx2<P>(prob, nl, c0, c1, s);
+  }
 #endif
   template <int P>
   static void scalar(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c, const RelaxStep& s) {
@@ -622,8 +714,16 @@ struct RelaxKernels {
 
 struct MMKernels {
 #ifdef SNL_HAVE_AVX2_PATH
-  static constexpr auto avx512 = mm_chunks_avx512;
-  static constexpr auto avx2 = mm_chunks_avx2;
+  template <int P>
+  static void avx512(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
+                     const MMStep& s) {
+    mm_chunks_avx512<P>(prob, nl, c0, c1, s);
+  }
+  template <int P>
+  static void avx2(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
+                   const MMStep& s) {
+    mm_chunks_avx2<P>(prob, nl, c0, c1, s);
+  }
 #endif
   template <int P>
   static void scalar(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c, const MMStep& s) {

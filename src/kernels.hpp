@@ -6,9 +6,9 @@
 // at a time, one per SIMD lane (C = 8 with AVX-512, 4 with AVX2; NodeLanes),
 // and each lane adds its own node's terms in that order: IEEE
 // add/sub/mul/div/sqrt and no FMA, so every lane equals the scalar twin bit
-// for bit. The scalar twins are the portable path (and the one for p = 3)
-// and what the tests compare the SIMD paths against. docs/performance.md has
-// the measurements behind this layout.
+// for bit. The SIMD kernels serve p = 2 and p = 3; the scalar twins are the
+// portable path and what the tests compare the SIMD paths against.
+// docs/performance.md has the measurements behind this layout.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -122,7 +122,7 @@ struct RelaxStep {
   double* wn;
   double L, beta;
   double* norms;
-  bool stream = false;  ///< non-temporal stores of xn and wn (stream_rows)
+  bool stream = false;  ///< non-temporal stores of xn and wn (stream_rows; p = 2 only)
 };
 void relax_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
                   const RelaxStep& s);
@@ -140,7 +140,7 @@ struct MMStep {
   double* aw;
   double keep, invL;
   double* norms;
-  bool stream = false;  ///< non-temporal stores of xn (stream_rows)
+  bool stream = false;  ///< non-temporal stores of xn (stream_rows; p = 2 only)
 };
 void mm_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
                const MMStep& s);
