@@ -3,7 +3,8 @@
 # the network, and solve it with the relaxation and with MM (ITERS iterations,
 # --tol 0, history only at the end so that the iteration phase is pure) under
 # mpirun -np 1 and -np 2 (strong scaling), plus weak scaling at 1M sensors per
-# rank. Prints ONE table (docs/performance.md explains the columns).
+# rank. Each solve is bracketed by two STREAM readings on its ranks (its
+# bound). Prints ONE table (docs/performance.md explains the columns).
 #
 #   bench/scaling.sh                          # sizes 1M and 10M, 1000 iterations
 #   SIZES="1000000" ITERS=200 bench/scaling.sh
@@ -47,13 +48,20 @@ gen() {  # n -> $WORK/net_n.h5, records generation time and peak RSS
   fi
 }
 
+# STREAM triad on np ranks (best of 10), for the bound of one solve: the VM's
+# shared bandwidth moves within minutes, so each solve is bracketed by two.
+triad() { mpirun -np "$1" "$BIN/stream_triad" 40000000 10 | awk '{print $2}'; }
+
 solve() {  # n ranks alg kind
-  local n=$1 np=$2 alg=$3 kind=$4 js="$WORK/s_${1}_${2}_${3}.json"
+  local n=$1 np=$2 alg=$3 kind=$4 js="$WORK/s_${1}_${2}_${3}.json" b0 b1
   log "solve n=$n ranks=$np $alg ($ITERS iterations)"
+  b0=$(triad "$np")
   mpirun -np "$np" "$BIN/snl" solve "$WORK/net_$n.h5" -o "$WORK/r_${n}_${np}_${alg}.h5" --algorithm "$alg" \
     --max-iter "$ITERS" --tol 0 --history-every "$ITERS" --partition "$PARTITION" --json "$js" -q
-  python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); d["kind"]=sys.argv[2]; print(json.dumps(d))' \
-    "$js" "$kind" >>"$rec"
+  b1=$(triad "$np")
+  python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); d["kind"]=sys.argv[2]
+d["stream_before_gbs"], d["stream_after_gbs"] = float(sys.argv[3]), float(sys.argv[4]); print(json.dumps(d))' \
+    "$js" "$kind" "$b0" "$b1" >>"$rec"
   [[ ${KEEP:-0} == 1 ]] || rm -f "$WORK/r_${n}_${np}_${alg}.h5"
 }
 
@@ -64,14 +72,13 @@ for n in $SIZES; do
   done
   [[ ${KEEP:-0} == 1 ]] || [[ $n == 1000000 && $WEAK == 1 ]] || rm -f "$WORK/net_$n.h5"
 done
-if [[ $WEAK == 1 ]]; then  # 1M sensors per rank
+if [[ $WEAK == 1 ]]; then  # 1M sensors per rank (the table reuses strong runs of the same size)
+  echo '{"weak": 1}' >>"$rec"
   for np in $RANKS; do
     n=$((1000000 * np))
     gen "$n"
     for alg in $ALGS; do
-      if [[ ! -f $WORK/s_${n}_${np}_${alg}.json ]]; then solve "$n" "$np" "$alg" weak
-      else python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); d["kind"]="weak"; print(json.dumps(d))' \
-        "$WORK/s_${n}_${np}_${alg}.json" >>"$rec"; fi
+      [[ -f $WORK/s_${n}_${np}_${alg}.json ]] || solve "$n" "$np" "$alg" weak
     done
   done
 fi

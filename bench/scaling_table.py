@@ -12,7 +12,13 @@ D = 2E directed sensor edges, A anchor pairs and p = 2 this is
 Older records (before the fused, SIMD kernels) lack the field; for them the
 model of that implementation is used:
   relaxation: 192 n + 16 g + 12 D + 12 A      mm: 88 n + 24 g + 44 D + 44 A
-bound = bytes / STREAM triad bandwidth of all cores (measured in the same run).
+bound = bytes / STREAM triad bandwidth on the run's own number of ranks, the
+mean of the two readings taken just before and just after that solve (the
+VM's shared bandwidth moves within minutes; records without them use the one
+reading of all cores at the start of the script). cap = the bandwidth cap on
+the scaling of this run, B_R / (R B_1) with the readings around this run and
+around its 1-rank run (weak: the 1M one): the par_eff of a loop at the
+memory bound on both rank counts.
 """
 import json
 import sys
@@ -36,11 +42,13 @@ def main(path):
     stream = next(r for r in recs if r.get("stream"))
     gens = {r["n"]: r for r in recs if r.get("gen")}
     runs = [r for r in recs if "algorithm" in r]
-    bw = stream["gbs_all"] * 1e9
+    if any(r.get("weak") for r in recs):  # weak scaling, 1M sensors per rank: strong runs of that size count too
+        runs += [dict(r, kind="weak") for r in runs
+                 if r["kind"] == "strong" and r["num_sensors"] == 1000000 * r["ranks"]]
     t1 = {(r["num_sensors"], r["algorithm"]): r["iterate_seconds"] for r in runs if r["ranks"] == 1}
     t1w = {r["algorithm"]: r["iterate_seconds"] for r in runs if r["ranks"] == 1 and r["num_sensors"] == 1000000}
-    print(f"STREAM triad: {stream['gbs_1']:.2f} GB/s (1 rank), {stream['gbs_all']:.2f} GB/s "
-          f"({stream['nproc']} ranks; the bound below uses this)")
+    print(f"STREAM triad at the start: {stream['gbs_1']:.2f} GB/s (1 rank), {stream['gbs_all']:.2f} GB/s "
+          f"({stream['nproc']} ranks); GB/s below: the readings just before/after each solve, on its ranks")
     # A loop at the memory bound on 1 and on N ranks scales by the bandwidths' ratio.
     print(f"bandwidth cap on strong scaling 1 -> {stream['nproc']} ranks: "
           f"{stream['gbs_all'] / (stream['nproc'] * stream['gbs_1']):.2f} (par_eff of a memory-bound loop)")
@@ -48,23 +56,39 @@ def main(path):
         print(f"generate n={n}: {g['generate_seconds']:.2f} s + write {g['gen_write_seconds']:.2f} s, "
               f"peak RSS {g['gen_rss_kib'] / 2**20:.2f} GiB (rank 0, serial)")
     hdr = ["kind", "n", "ranks", "alg", "part", "read_s", "setup_s", "iter_s", "ms/iter", "model_MB",
-           "bound_ms", "ratio", "par_eff", "RSS_GiB", "ghosts", "halo_KB/it", "wait", "write_s", "B/sensor"]
+           "GB/s", "bound_ms", "ratio", "par_eff", "cap", "RSS_GiB", "ghosts", "halo_KB/it", "wait", "write_s",
+           "B/sensor"]
+
+    def run_bw(r):  # GB/s for this run's bound
+        if "stream_before_gbs" in r:
+            return 0.5 * (r["stream_before_gbs"] + r["stream_after_gbs"])
+        return stream["gbs_all"]
+
+    base1 = {(r["num_sensors"], r["algorithm"]): r for r in runs if r["ranks"] == 1 and r["kind"] == "strong"}
     rows = []
     for r in sorted(runs, key=lambda r: (r["kind"], r["num_sensors"], r["algorithm"], r["ranks"])):
         it = r["iterations"]
         ms = 1e3 * r["iterate_seconds"] / it
         mb = model_bytes(r)
-        bound_ms = 1e3 * mb / bw
+        gbs = run_bw(r)
+        bound_ms = mb / gbs / 1e6
         if r["kind"] == "weak":
             base = t1w.get(r["algorithm"])
             eff = base / r["iterate_seconds"] if base else float("nan")
+            b1 = base1.get((1000000, r["algorithm"]))
         else:
             base = t1.get((r["num_sensors"], r["algorithm"]))
             eff = base / (r["ranks"] * r["iterate_seconds"]) if base else float("nan")
+            b1 = base1.get((r["num_sensors"], r["algorithm"]))
+        cap = float("nan")
+        if b1 is not None and "stream_before_gbs" in r and "stream_before_gbs" in b1:
+            cap = gbs / (r["ranks"] * run_bw(b1))
+        gbs_txt = (f"{r['stream_before_gbs']:.0f}/{r['stream_after_gbs']:.0f}" if "stream_before_gbs" in r
+                   else f"{gbs:.0f}")
         rows.append([r["kind"], r["num_sensors"], r["ranks"], r["algorithm"], r["partition"],
                      f"{r['read_seconds']:.2f}", f"{r['setup_seconds']:.2f}", f"{r['iterate_seconds']:.1f}",
-                     f"{ms:.2f}", f"{mb / 1e6:.0f}", f"{bound_ms:.2f}", f"{ms / bound_ms:.2f}", f"{eff:.2f}",
-                     f"{r['peak_rss_bytes_total'] / 2**30:.2f}", r["ghosts"],
+                     f"{ms:.2f}", f"{mb / 1e6:.0f}", gbs_txt, f"{bound_ms:.2f}", f"{ms / bound_ms:.2f}",
+                     f"{eff:.2f}", f"{cap:.2f}", f"{r['peak_rss_bytes_total'] / 2**30:.2f}", r["ghosts"],
                      f"{r['halo_bytes_per_iteration'] / 1e3:.1f}", f"{r['iterate_wait_fraction']:.3f}",
                      f"{r['write_seconds']:.2f}", f"{r['state_bytes_per_sensor']:.0f}"])
     w = [max(len(str(x)) for x in col) for col in zip(hdr, *rows)]
