@@ -22,7 +22,10 @@ PartitionMethod parse_partition_method(const std::string& s) {
 namespace {
 
 // METIS k-way on rank 0. Returns "" on success, else why it could not run.
-std::string metis_partition(GlobalId n, const std::vector<GlobalId>& edges, int nparts, std::vector<int>& owner) {
+// phase(name) marks the end of a phase (PartitionStats::phases).
+template <class Phase>
+std::string metis_partition(GlobalId n, const std::vector<GlobalId>& edges, int nparts, std::vector<int>& owner,
+                            Phase&& phase) {
   const std::int64_t nnz = static_cast<std::int64_t>(edges.size());  // = 2E directed entries
   static_assert(sizeof(idx_t) == 4 || sizeof(idx_t) == 8, "unexpected METIS idx_t");
   const std::int64_t idx_max = std::numeric_limits<idx_t>::max();
@@ -41,6 +44,7 @@ std::string metis_partition(GlobalId n, const std::vector<GlobalId>& edges, int 
       adjncy[fill[edges[e + 1]]++] = static_cast<idx_t>(edges[e]);
     }
   }
+  phase("metis_graph");
   idx_t nvtxs = static_cast<idx_t>(n), ncon = 1, np = nparts, objval = 0;
   idx_t options[METIS_NOPTIONS];
   METIS_SetDefaultOptions(options);
@@ -56,6 +60,7 @@ std::string metis_partition(GlobalId n, const std::vector<GlobalId>& edges, int 
   }
   if (status != METIS_OK) return status == METIS_ERROR_MEMORY ? "METIS ran out of memory" : "METIS failed";
   owner.assign(part.begin(), part.end());
+  phase("metis");
   return "";
 }
 
@@ -64,16 +69,24 @@ std::string metis_partition(GlobalId n, const std::vector<GlobalId>& edges, int 
 std::vector<int> partition_graph(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges,
                                  PartitionMethod method, PartitionStats* stats) {
   const double t0 = MPI_Wtime();
+  double tmark = t0;
+  std::vector<std::pair<std::string, double>> phases;
+  auto phase = [&](const char* name) {
+    const double now = MPI_Wtime();
+    phases.emplace_back(name, now - tmark);
+    tmark = now;
+  };
   const int size = comm_size(comm), rank = comm_rank(comm);
   std::vector<int> owner(static_cast<std::size_t>(n));
   std::string used = "block", note;
   bool done = false;
   if (method == PartitionMethod::kMetis && size > 1) {
     std::vector<GlobalId> all = gather_to_root(comm, edges);
+    phase("gather");
     std::string why;
     if (rank == 0) {
       try {
-        why = metis_partition(n, all, size, owner);
+        why = metis_partition(n, all, size, owner, phase);
       } catch (const std::bad_alloc&) {
         why = "out of memory building the METIS graph";
       }
@@ -83,6 +96,7 @@ std::vector<int> partition_graph(MPI_Comm comm, GlobalId n, const std::vector<Gl
     why = bcast_string(comm, why);
     if (why.empty()) {
       bcast_bytes(comm, owner.data(), owner.size() * sizeof(int));
+      phase("bcast");
       used = "metis";
       done = true;
     } else {
@@ -110,6 +124,8 @@ std::vector<int> partition_graph(MPI_Comm comm, GlobalId n, const std::vector<Gl
     for (int o : owner) ++counts[o];
     const double mean = static_cast<double>(n) / size;
     stats->imbalance = mean > 0 ? static_cast<double>(*std::max_element(counts.begin(), counts.end())) / mean : 1.0;
+    phase("stats");
+    stats->phases = std::move(phases);
     stats->seconds = MPI_Wtime() - t0;
   }
   return owner;

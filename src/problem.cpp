@@ -133,6 +133,7 @@ void LocalizationProblem::build(MPI_Comm comm, const Network& slab, PartitionMet
   phase_done("connectivity");
   std::vector<int> owner = partition_graph(comm, n, sedges, method, &rep.partition);
   phase_done("partition");
+  for (const auto& ph : rep.partition.phases) rep.setup_phases.emplace_back("partition." + ph.first, ph.second);
   graph_ = DistGraph(comm, n, owner, sedges, sranges, 1, std::max(p, 2));
   phase_done("graph");
   for (const auto& ph : graph_.build_phases()) rep.setup_phases.emplace_back("graph." + ph.first, ph.second);

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "snl/common.hpp"
@@ -24,6 +25,9 @@ struct PartitionStats {
   GlobalId total_ghosts = 0;   ///< sum over ranks
   GlobalId max_ghosts = 0;
   double seconds = 0.0;
+  /// Seconds of its phases on this rank: gather (the edge lists to rank 0),
+  /// metis_graph (METIS's CSR), metis (the call), bcast (the owners), stats.
+  std::vector<std::pair<std::string, double>> phases;
 };
 
 /// Collective. Owner rank of every global node, identical on every rank.
