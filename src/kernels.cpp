@@ -166,15 +166,17 @@ void mm_chunk_scalar(const LocalizationProblem& prob, const NodeLanes& nl, std::
 // Software prefetch of the lane arrays a fixed distance ahead (groups at
 // kPrefetchBytes of ranges): the arrays are read in order, but the hardware
 // prefetcher alone left these sqrt/div-heavy loops waiting on memory. At 1M
-// sensors on one core: relaxation 5.7-6.5 -> 5.2-5.3 ms, MM 8.9-9.7 -> 7.7-8.2
-// ms per iteration (docs/performance.md). The index is clamped to the last
+// sensors on one core (AVX-512): relaxation 5.9-6.1 -> 5.3-5.8 ms, MM 9.1-9.8
+// -> 8.0-8.3 ms per iteration; 10M on 2 ranks 7-13% faster; no gain for the
+// AVX2 kernels (docs/performance.md). The index is clamped to the last
 // group so that no address past the arrays is formed. EdgeP > 0: also MM's
 // edge rows y (EdgeP doubles per lane and group). Always inlined: GCC
 // takes a function that only prefetches for one without side effects and
 // drops calls to it that it did not inline (it did so in the MM kernels).
 constexpr std::int64_t kPrefetchBytes = 2048;
 template <int C, int EdgeP>
-__attribute__((always_inline)) inline void prefetch_group(const NodeLanes& nl, std::int64_t g, std::int64_t last, const double* y) {
+__attribute__((always_inline)) inline void prefetch_group(const NodeLanes& nl, std::int64_t g, std::int64_t last,
+                                                          const double* y) {
   const std::int64_t ahead = std::min(g + kPrefetchBytes / (8 * C), last);
   _mm_prefetch(reinterpret_cast<const char*>(nl.rho.data() + C * ahead), _MM_HINT_T0);
   _mm_prefetch(reinterpret_cast<const char*>(nl.adj.data() + C * ahead), _MM_HINT_T0);
@@ -228,8 +230,9 @@ SNL_AVX2 inline void load_own(const double* r, __m256d* U) {
 }
 
 // The inverse of load_own. p = 2 rows may go out with non-temporal stores
-// (stream_rows: the lines are not read for ownership first); p = 3 rows
-// (24 bytes, not always 16-byte aligned) are always stored plainly.
+// (stream_rows: the lines are not read for ownership first; 16-byte rows in
+// std::vector storage are 16-byte aligned, as _mm_stream_pd needs); p = 3
+// rows (24 bytes, not always 16-byte aligned) are always stored plainly.
 template <int P>
 SNL_AVX2 inline void store_own(double* t, const __m256d* U, bool stream) {
   if constexpr (P == 2) {
@@ -408,6 +411,7 @@ SNL_AVX512 inline void load_rows8(const double* x, const LocalId* idx, __m512d* 
   }
 }
 
+// load_own with 8 lanes.
 template <int P>
 SNL_AVX512 inline void load_own8(const double* r, __m512d* U) {
   if constexpr (P == 2) {
@@ -453,6 +457,7 @@ SNL_AVX512 inline void store_lanes8(double* q, __m512d v) {
   _mm512_storeu_pd(q, _mm512_permutexvar_pd(_mm512_setr_epi64(0, 2, 4, 6, 1, 3, 5, 7), v));
 }
 
+// square_sum with 8 lanes.
 SNL_AVX512 inline __m512d square_sum8(const __m512d* U, int P) {
   __m512d s = _mm512_mul_pd(U[0], U[0]);
   for (int k = 1; k < P; ++k) s = _mm512_add_pd(s, _mm512_mul_pd(U[k], U[k]));
