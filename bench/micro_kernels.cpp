@@ -12,6 +12,7 @@
 #include <benchmark/benchmark.h>
 #include <mpi.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <map>
 #include <memory>
@@ -30,6 +31,11 @@ GlobalId bench_sensors() {
   return s ? std::atoll(s) : 1000000;
 }
 
+int bench_dim() {
+  const char* s = std::getenv("SNL_MICRO_DIM");
+  return s ? std::atoi(s) : 2;
+}
+
 // One problem per local ordering, built once (generation and setup take
 // seconds); cleared before MPI_Finalize (the halo plans hold MPI requests).
 std::map<bool, std::unique_ptr<LocalizationProblem>> g_problems;
@@ -40,8 +46,7 @@ LocalizationProblem& problem(bool rcm) {
     static Network whole = [] {
       GenerateOptions opt;
       opt.sensors = bench_sensors();
-      const char* dim = std::getenv("SNL_MICRO_DIM");
-      opt.dim = dim ? std::atoi(dim) : 2;
+      opt.dim = bench_dim();
       opt.avg_degree = 6;
       opt.sigma = 0.01;
       opt.localizable = GenerateOptions::Localizable::kNo;
@@ -163,6 +168,12 @@ int main(int argc, char** argv) {
   int rank = 0;
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   benchmark::Initialize(&argc, argv);
+  // The same environment on every rank, so every rank takes this exit.
+  if (bench_sensors() < 100 || (bench_dim() != 2 && bench_dim() != 3)) {
+    if (rank == 0) std::fprintf(stderr, "snl_micro: SNL_MICRO_SENSORS must be >= 100 and SNL_MICRO_DIM 2 or 3\n");
+    MPI_Finalize();
+    return 2;
+  }
   if (rank == 0) {
     benchmark::RunSpecifiedBenchmarks();
   } else {
