@@ -1,18 +1,23 @@
 #!/usr/bin/env bash
 # Checkpoint/restart: a run stopped by SIGUSR1 (what Slurm's --signal sends)
 # writes a checkpoint and exits with status 3; resuming on 1, 2 or 3 ranks gives
-# positions bit-identical to the uninterrupted run. Wrong network, wrong
+# positions bit-identical to the uninterrupted run (2D, and MM on a 3D network).
+# Wrong network, wrong
 # options and damaged checkpoints are refused with a clear message.
 source "$(dirname "$0")/common.bash"
 "$SNL" generate -o "$T/net.h5" --sensors 3000 --avg-degree 7 --sigma 0.05 --seed 21 -q
 "$SNL" generate -o "$T/other.h5" --sensors 3000 --avg-degree 7 --sigma 0.05 --seed 22 -q
 "$SNL" generate -o "$T/small.h5" --sensors 400 --avg-degree 7 --sigma 0.05 --seed 23 -q
-for alg in async pipeline bb mm; do
+"$SNL" generate -o "$T/net3.h5" --sensors 3000 --dim 3 --avg-degree 7 --sigma 0.05 --seed 24 -q
+# mm3: MM on a 3D network (3D SIMD kernels, 3D edge variables in the checkpoint).
+for case in async pipeline bb mm3 mm; do  # mm last: the refusals below use its checkpoint
+  alg=${case%3}
   ARGS=(--max-iter 4000 --tol 0 -q)
   NET="$T/net.h5"
   EVERY=100
-  if [ $alg = async ]; then ARGS=(--max-iter 300 --tol 0 -q); NET="$T/small.h5"; EVERY=10; fi
-  mpi 2 "$SNL" solve "$NET" -o "$T/ref.$alg.h5" --algorithm $alg "${ARGS[@]}"
+  if [ $case = async ]; then ARGS=(--max-iter 300 --tol 0 -q); NET="$T/small.h5"; EVERY=10; fi
+  if [ $case = mm3 ]; then NET="$T/net3.h5"; fi
+  mpi 2 "$SNL" solve "$NET" -o "$T/ref.$case.h5" --algorithm $alg "${ARGS[@]}"
   # Stop a run with SIGUSR1 after it has written some checkpoints.
   rm -f "$T/ck.h5"
   set +e
@@ -27,13 +32,13 @@ for alg in async pipeline bb mm; do
   wait $pid
   rc=$?
   set -e
-  [ $rc -eq 3 ] || fail "$alg: expected exit status 3 after SIGUSR1, got $rc"
-  [ -f "$T/stopped.h5" ] && fail "$alg: a stopped run must not write the result"
+  [ $rc -eq 3 ] || fail "$case: expected exit status 3 after SIGUSR1, got $rc"
+  [ -f "$T/stopped.h5" ] && fail "$case: a stopped run must not write the result"
   for np in 1 3; do
     cp "$T/ck.h5" "$T/ck$np.h5"
-    mpi $np "$SNL" solve "$NET" -o "$T/res.$alg.$np.h5" --algorithm $alg "${ARGS[@]}" \
+    mpi $np "$SNL" solve "$NET" -o "$T/res.$case.$np.h5" --algorithm $alg "${ARGS[@]}" \
       --checkpoint "$T/ck$np.h5" --checkpoint-every 1000 --restart "$T/ck$np.h5"
-    h5diff "$T/ref.$alg.h5" "$T/res.$alg.$np.h5" /positions || fail "$alg: restart on $np ranks differs"
+    h5diff "$T/ref.$case.h5" "$T/res.$case.$np.h5" /positions || fail "$case: restart on $np ranks differs"
   done
 done
 ARGS=(--max-iter 4000 --tol 0 -q)
