@@ -2,8 +2,8 @@
 # Checkpoint/restart: a run stopped by SIGUSR1 (what Slurm's --signal sends)
 # writes a checkpoint and exits with status 3; resuming on 1, 2 or 3 ranks gives
 # positions bit-identical to the uninterrupted run (2D, and MM on a 3D network).
-# Wrong network, wrong
-# options and damaged checkpoints are refused with a clear message.
+# Wrong network, wrong options and damaged checkpoints are refused with a
+# clear message.
 source "$(dirname "$0")/common.bash"
 "$SNL" generate -o "$T/net.h5" --sensors 3000 --avg-degree 7 --sigma 0.05 --seed 21 -q
 "$SNL" generate -o "$T/other.h5" --sensors 3000 --avg-degree 7 --sigma 0.05 --seed 22 -q
