@@ -45,8 +45,6 @@ def main(path):
     if any(r.get("weak") for r in recs):  # weak scaling, 1M sensors per rank: strong runs of that size count too
         runs += [dict(r, kind="weak") for r in runs
                  if r["kind"] == "strong" and r["num_sensors"] == 1000000 * r["ranks"]]
-    t1 = {(r["num_sensors"], r["algorithm"]): r["iterate_seconds"] for r in runs if r["ranks"] == 1}
-    t1w = {r["algorithm"]: r["iterate_seconds"] for r in runs if r["ranks"] == 1 and r["num_sensors"] == 1000000}
     print(f"STREAM triad at the start: {stream['gbs_1']:.2f} GB/s (1 rank), {stream['gbs_all']:.2f} GB/s "
           f"({stream['nproc']} ranks); GB/s below: the readings just before/after each solve, on its ranks")
     # A loop at the memory bound on 1 and on N ranks scales by the bandwidths' ratio.
@@ -64,7 +62,8 @@ def main(path):
             return 0.5 * (r["stream_before_gbs"] + r["stream_after_gbs"])
         return stream["gbs_all"]
 
-    base1 = {(r["num_sensors"], r["algorithm"]): r for r in runs if r["ranks"] == 1 and r["kind"] == "strong"}
+    # The 1-rank run of each size and method: the base of par_eff and cap (weak: the 1M one).
+    base1 = {(r["num_sensors"], r["algorithm"]): r for r in runs if r["ranks"] == 1}
     rows = []
     for r in sorted(runs, key=lambda r: (r["kind"], r["num_sensors"], r["algorithm"], r["ranks"])):
         it = r["iterations"]
@@ -72,14 +71,11 @@ def main(path):
         mb = model_bytes(r)
         gbs = run_bw(r)
         bound_ms = mb / gbs / 1e6
-        if r["kind"] == "weak":
-            base = t1w.get(r["algorithm"])
-            eff = base / r["iterate_seconds"] if base else float("nan")
-            b1 = base1.get((1000000, r["algorithm"]))
-        else:
-            base = t1.get((r["num_sensors"], r["algorithm"]))
-            eff = base / (r["ranks"] * r["iterate_seconds"]) if base else float("nan")
-            b1 = base1.get((r["num_sensors"], r["algorithm"]))
+        weak = r["kind"] == "weak"
+        b1 = base1.get((1000000 if weak else r["num_sensors"], r["algorithm"]))
+        eff = float("nan")
+        if b1 is not None:
+            eff = b1["iterate_seconds"] / ((1 if weak else r["ranks"]) * r["iterate_seconds"])
         cap = float("nan")
         if b1 is not None and "stream_before_gbs" in r and "stream_before_gbs" in b1:
             cap = gbs / (r["ranks"] * run_bw(b1))

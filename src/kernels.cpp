@@ -209,6 +209,14 @@ __attribute__((always_inline)) inline void prefetch_rows(const NodeLanes& nl, st
 // upper ymm state slowed the caller's SSE code by ~40% (docs/performance.md).
 #define SNL_AVX2 __attribute__((target("avx2")))
 
+// Coordinate registers, stored lane by lane, back to the P-rows of the
+// chunk's nodes 0..C-1 at t (the p = 3 row store of both widths).
+template <int P, int C>
+inline void rows_from_lanes(double* t, const double (&lanes)[P][C]) {
+  for (int q = 0; q < C; ++q)
+    for (int k = 0; k < P; ++k) t[P * q + k] = lanes[k][NodeLanes::lane_of_node(q, C)];
+}
+
 // Row offsets 0..7, for loading a chunk's own p = 3 rows with the neighbour loads.
 constexpr LocalId kIota[8] = {0, 1, 2, 3, 4, 5, 6, 7};
 
@@ -264,8 +272,7 @@ SNL_AVX2 inline void store_own(double* t, const __m256d* U, bool stream) {
   } else {
     alignas(32) double lanes[P][4];
     for (int k = 0; k < P; ++k) _mm256_store_pd(lanes[k], U[k]);
-    for (int q = 0; q < 4; ++q)
-      for (int k = 0; k < P; ++k) t[P * q + k] = lanes[k][NodeLanes::lane_of_node(q, 4)];
+    rows_from_lanes(t, lanes);
   }
 }
 
@@ -461,8 +468,7 @@ SNL_AVX512 inline void store_own8(double* t, const __m512d* U, bool stream) {
   } else {
     alignas(64) double lanes[P][8];
     for (int k = 0; k < P; ++k) _mm512_store_pd(lanes[k], U[k]);
-    for (int q = 0; q < 8; ++q)
-      for (int k = 0; k < P; ++k) t[P * q + k] = lanes[k][NodeLanes::lane_of_node(q, 8)];
+    rows_from_lanes(t, lanes);
   }
 }
 

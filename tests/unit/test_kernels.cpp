@@ -1,8 +1,8 @@
 // The node-lane kernels (src/kernels.hpp): the lane layout against the CSR
 // graph, the SIMD steps against their scalar twins bit for bit (awkward values
 // included), and the disk residual's boundary cases. Skips the SIMD halves
-// where the CPU has no AVX2 (the scalar path is then the only one). Every
-// kernel test runs on a 2D and a 3D network.
+// where the CPU has no AVX2 (the scalar path is then the only one). The
+// kernel tests run on a 2D and a 3D network (KernelsByDim).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -10,6 +10,7 @@
 #include <limits>
 #include <random>
 #include <set>
+#include <string>
 #include <vector>
 
 #include "kernels.hpp"
@@ -77,107 +78,6 @@ bool have_simd() {
   return on;
 }
 
-void relaxation_simd_equals_scalar(int dim) {
-  const LocalizationProblem prob = make_problem(dim);
-  detail::NodeLanes nl;
-  nl.build(prob);
-  for (unsigned seed : {1u, 2u, 3u}) {
-    const auto w = awkward_rows(prob, seed), x = awkward_rows(prob, seed + 10);
-    const RelaxOut b = relax(prob, nl, w, x, false);
-    for (bool stream : {false, true}) {  // plain or non-temporal stores of the rows
-      const RelaxOut a = relax(prob, nl, w, x, true, stream);
-      EXPECT_TRUE(same_bits(a.xn, b.xn)) << seed << " stream " << stream;
-      EXPECT_TRUE(same_bits(a.wn, b.wn)) << seed << " stream " << stream;
-      EXPECT_TRUE(same_bits(a.norms, b.norms)) << seed << " stream " << stream;
-    }
-  }
-}
-
-void disk_residual_zero_inside(int dim) {
-  // e(z, rho) = max(0, 1 - rho/|z|) z: with every range set to exactly the
-  // computed |z| (boundary) or larger (inside), and z = 0 for coincident rows,
-  // g = 0 and x(k) = w for nodes without anchors, on both paths.
-  const LocalizationProblem prob = make_problem(dim);
-  detail::NodeLanes nl;
-  nl.build(prob);
-  std::mt19937_64 gen(5);
-  std::uniform_real_distribution<double> u(-1, 1);
-  std::vector<double> w(std::size_t(prob.num_local()) * dim);
-  for (auto& v : w) v = u(gen);
-  for (std::int64_t c = 0; c < nl.size(); ++c)
-    for (int q = 0; q < nl.count[c]; ++q)
-      for (std::int64_t g = nl.group_off[c]; g < nl.group_off[c + 1]; ++g) {
-        const LocalId v = nl.first[c] + q, nb = nl.adj[g * nl.lanes + q];
-        double s = 0;  // |z|^2 summed in the kernels' order
-        for (int k = 0; k < dim; ++k) {
-          const double z = w[dim * std::size_t(v) + k] - w[dim * std::size_t(nb) + k];
-          s += z * z;
-        }
-        const double nz = std::sqrt(s);
-        nl.rho[g * nl.lanes + detail::NodeLanes::lane_of_node(q, nl.lanes)] = (g % 2) ? nz : 2 * nz;
-      }
-  for (bool simd : {false, true}) {
-    if (simd && !have_simd()) continue;
-    const RelaxOut o = relax(prob, nl, w, w, simd);
-    int checked = 0;
-    for (LocalId v = 0; v < prob.num_owned(); ++v) {
-      if (prob.anchor_offsets()[v] != prob.anchor_offsets()[v + 1]) continue;
-      ++checked;
-      for (int c = 0; c < dim; ++c) {
-        EXPECT_EQ(o.xn[dim * std::size_t(v) + c], w[dim * std::size_t(v) + c]) << v << " simd " << simd;
-      }
-    }
-    EXPECT_GT(checked, 50);
-  }
-}
-
-void mm_simd_equals_scalar(int dim) {
-  const LocalizationProblem prob = make_problem(dim);
-  detail::NodeLanes nl;
-  nl.build(prob);
-  std::mt19937_64 gen(9);
-  std::uniform_real_distribution<double> u(-1, 1);
-  const auto x = awkward_rows(prob, 4);
-  std::vector<double> y0(std::size_t(nl.groups()) * nl.lanes * dim), aw0(prob.anchor_ranges().size() * dim);
-  for (auto& v : y0) v = u(gen);
-  for (auto& v : aw0) v = u(gen);
-  // Zero edge variables next to coincident rows: the projection's 0 case.
-  const auto& off = prob.graph().offsets();
-  for (int c = 0; c < dim; ++c) y0[nl.at(10, 0, dim, c)] = 0.0;
-  ASSERT_GT(off[11], off[10]);
-  auto run = [&](bool simd, bool stream, std::vector<double>* y, std::vector<double>* aw, std::vector<double>* xn,
-                 std::vector<double>* norms) {
-    *y = y0;
-    *aw = aw0;
-    xn->assign(x.size(), -7.0);
-    norms->assign(16, 0.0);
-    const bool had = detail::set_simd_enabled(simd);
-    const detail::MMStep st{x.data(), xn->data(), y->data(), aw->data(), 0.9, 0.1, norms->data(), stream};
-    detail::mm_chunks(prob, nl, 0, nl.split, st);
-    detail::mm_chunks(prob, nl, nl.split, nl.size(), st);
-    detail::set_simd_enabled(had);
-  };
-  std::vector<double> ya, awa, xa, na, yb, awb, xb, nb, ys, aws, xs, ns;
-  run(true, false, &ya, &awa, &xa, &na);
-  run(false, false, &yb, &awb, &xb, &nb);
-  run(true, true, &ys, &aws, &xs, &ns);  // non-temporal stores of x(t+1)
-  EXPECT_TRUE(same_bits(xs, xb));
-  EXPECT_TRUE(same_bits(ns, nb));
-  EXPECT_TRUE(same_bits(xa, xb));
-  EXPECT_TRUE(same_bits(awa, awb));
-  EXPECT_TRUE(same_bits(na, nb));
-  // Edge variables of real slots (padding lanes are never read back).
-  for (LocalId v = 0; v < prob.num_owned(); ++v)
-    for (auto e = off[v]; e < off[v + 1]; ++e)
-      for (int c = 0; c < dim; ++c) {
-        const std::size_t at = nl.at(v, e - off[v], dim, c);
-        EXPECT_TRUE(same_bits(ya[at], yb[at])) << v << " slot " << e - off[v];
-      }
-  // P_sphere(0) = rho e_1 where keep y + invL dz = 0.
-  EXPECT_EQ(ya[nl.at(10, 0, dim, 0)], prob.graph().edge_values()[off[10]]);
-  for (int c = 1; c < dim; ++c) EXPECT_EQ(ya[nl.at(10, 0, dim, c)], 0.0);
-}
-
 }  // namespace
 
 TEST(NodeLanes, LayoutHoldsEverySlotOnceInItsOrder) {
@@ -224,25 +124,113 @@ TEST(NodeLanes, LayoutHoldsEverySlotOnceInItsOrder) {
   EXPECT_EQ(seen.size(), gr.adjacency().size() * 2);
 }
 
-TEST(Kernels, SimdRelaxationStepEqualsScalarBitForBit) {
+// Every kernel test runs on a 2D and a 3D network.
+class KernelsByDim : public ::testing::TestWithParam<int> {};
+INSTANTIATE_TEST_SUITE_P(Dim, KernelsByDim, ::testing::Values(2, 3),
+                         [](const ::testing::TestParamInfo<int>& i) { return "p" + std::to_string(i.param); });
+
+TEST_P(KernelsByDim, SimdRelaxationStepEqualsScalarBitForBit) {
   if (!have_simd()) GTEST_SKIP() << "no AVX2 on this CPU";
-  for (int dim : {2, 3}) {
-    SCOPED_TRACE(dim);
-    relaxation_simd_equals_scalar(dim);
+  const int dim = GetParam();
+  const LocalizationProblem prob = make_problem(dim);
+  detail::NodeLanes nl;
+  nl.build(prob);
+  for (unsigned seed : {1u, 2u, 3u}) {
+    const auto w = awkward_rows(prob, seed), x = awkward_rows(prob, seed + 10);
+    const RelaxOut b = relax(prob, nl, w, x, false);
+    for (bool stream : {false, true}) {  // plain or non-temporal stores of the rows
+      const RelaxOut a = relax(prob, nl, w, x, true, stream);
+      EXPECT_TRUE(same_bits(a.xn, b.xn)) << seed << " stream " << stream;
+      EXPECT_TRUE(same_bits(a.wn, b.wn)) << seed << " stream " << stream;
+      EXPECT_TRUE(same_bits(a.norms, b.norms)) << seed << " stream " << stream;
+    }
   }
 }
 
-TEST(Kernels, DiskResidualIsZeroInsideAndOnTheBoundary) {
-  for (int dim : {2, 3}) {
-    SCOPED_TRACE(dim);
-    disk_residual_zero_inside(dim);
+TEST_P(KernelsByDim, DiskResidualIsZeroInsideAndOnTheBoundary) {
+  const int dim = GetParam();
+  // e(z, rho) = max(0, 1 - rho/|z|) z: with every range set to exactly the
+  // computed |z| (boundary) or larger (inside), and z = 0 for coincident rows,
+  // g = 0 and x(k) = w for nodes without anchors, on both paths.
+  const LocalizationProblem prob = make_problem(dim);
+  detail::NodeLanes nl;
+  nl.build(prob);
+  std::mt19937_64 gen(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<double> w(std::size_t(prob.num_local()) * dim);
+  for (auto& v : w) v = u(gen);
+  for (std::int64_t c = 0; c < nl.size(); ++c)
+    for (int q = 0; q < nl.count[c]; ++q)
+      for (std::int64_t g = nl.group_off[c]; g < nl.group_off[c + 1]; ++g) {
+        const LocalId v = nl.first[c] + q, nb = nl.adj[g * nl.lanes + q];
+        double s = 0;  // |z|^2 summed in the kernels' order
+        for (int k = 0; k < dim; ++k) {
+          const double z = w[dim * std::size_t(v) + k] - w[dim * std::size_t(nb) + k];
+          s += z * z;
+        }
+        const double nz = std::sqrt(s);
+        nl.rho[g * nl.lanes + detail::NodeLanes::lane_of_node(q, nl.lanes)] = (g % 2) ? nz : 2 * nz;
+      }
+  for (bool simd : {false, true}) {
+    if (simd && !have_simd()) continue;
+    const RelaxOut o = relax(prob, nl, w, w, simd);
+    int checked = 0;
+    for (LocalId v = 0; v < prob.num_owned(); ++v) {
+      if (prob.anchor_offsets()[v] != prob.anchor_offsets()[v + 1]) continue;
+      ++checked;
+      for (int c = 0; c < dim; ++c) {
+        EXPECT_EQ(o.xn[dim * std::size_t(v) + c], w[dim * std::size_t(v) + c]) << v << " simd " << simd;
+      }
+    }
+    EXPECT_GT(checked, 50);
   }
 }
 
-TEST(Kernels, SimdMMStepEqualsScalarBitForBit) {
+TEST_P(KernelsByDim, SimdMMStepEqualsScalarBitForBit) {
   if (!have_simd()) GTEST_SKIP() << "no AVX2 on this CPU";
-  for (int dim : {2, 3}) {
-    SCOPED_TRACE(dim);
-    mm_simd_equals_scalar(dim);
-  }
+  const int dim = GetParam();
+  const LocalizationProblem prob = make_problem(dim);
+  detail::NodeLanes nl;
+  nl.build(prob);
+  std::mt19937_64 gen(9);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const auto x = awkward_rows(prob, 4);
+  std::vector<double> y0(std::size_t(nl.groups()) * nl.lanes * dim), aw0(prob.anchor_ranges().size() * dim);
+  for (auto& v : y0) v = u(gen);
+  for (auto& v : aw0) v = u(gen);
+  // Zero edge variables next to coincident rows: the projection's 0 case.
+  const auto& off = prob.graph().offsets();
+  for (int c = 0; c < dim; ++c) y0[nl.at(10, 0, dim, c)] = 0.0;
+  ASSERT_GT(off[11], off[10]);
+  auto run = [&](bool simd, bool stream, std::vector<double>* y, std::vector<double>* aw, std::vector<double>* xn,
+                 std::vector<double>* norms) {
+    *y = y0;
+    *aw = aw0;
+    xn->assign(x.size(), -7.0);
+    norms->assign(16, 0.0);
+    const bool had = detail::set_simd_enabled(simd);
+    const detail::MMStep st{x.data(), xn->data(), y->data(), aw->data(), 0.9, 0.1, norms->data(), stream};
+    detail::mm_chunks(prob, nl, 0, nl.split, st);
+    detail::mm_chunks(prob, nl, nl.split, nl.size(), st);
+    detail::set_simd_enabled(had);
+  };
+  std::vector<double> ya, awa, xa, na, yb, awb, xb, nb, ys, aws, xs, ns;
+  run(true, false, &ya, &awa, &xa, &na);
+  run(false, false, &yb, &awb, &xb, &nb);
+  run(true, true, &ys, &aws, &xs, &ns);  // non-temporal stores of x(t+1)
+  EXPECT_TRUE(same_bits(xs, xb));
+  EXPECT_TRUE(same_bits(ns, nb));
+  EXPECT_TRUE(same_bits(xa, xb));
+  EXPECT_TRUE(same_bits(awa, awb));
+  EXPECT_TRUE(same_bits(na, nb));
+  // Edge variables of real slots (padding lanes are never read back).
+  for (LocalId v = 0; v < prob.num_owned(); ++v)
+    for (auto e = off[v]; e < off[v + 1]; ++e)
+      for (int c = 0; c < dim; ++c) {
+        const std::size_t at = nl.at(v, e - off[v], dim, c);
+        EXPECT_TRUE(same_bits(ya[at], yb[at])) << v << " slot " << e - off[v];
+      }
+  // P_sphere(0) = rho e_1 where keep y + invL dz = 0.
+  EXPECT_EQ(ya[nl.at(10, 0, dim, 0)], prob.graph().edge_values()[off[10]]);
+  for (int c = 1; c < dim; ++c) EXPECT_EQ(ya[nl.at(10, 0, dim, c)], 0.0);
 }
