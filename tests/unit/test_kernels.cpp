@@ -124,17 +124,20 @@ TEST(NodeLanes, LayoutHoldsEverySlotOnceInItsOrder) {
   EXPECT_EQ(seen.size(), gr.adjacency().size() * 2);
 }
 
-// Every kernel test runs on a 2D and a 3D network.
-class KernelsByDim : public ::testing::TestWithParam<int> {};
+// Every kernel test runs on a 2D and a 3D network, with the network's lane
+// layout built once per test.
+class KernelsByDim : public ::testing::TestWithParam<int> {
+ protected:
+  KernelsByDim() : dim(GetParam()), prob(make_problem(dim)) { nl.build(prob); }
+  const int dim;
+  const LocalizationProblem prob;
+  detail::NodeLanes nl;
+};
 INSTANTIATE_TEST_SUITE_P(Dim, KernelsByDim, ::testing::Values(2, 3),
                          [](const ::testing::TestParamInfo<int>& i) { return "p" + std::to_string(i.param); });
 
 TEST_P(KernelsByDim, SimdRelaxationStepEqualsScalarBitForBit) {
   if (!have_simd()) GTEST_SKIP() << "no AVX2 on this CPU";
-  const int dim = GetParam();
-  const LocalizationProblem prob = make_problem(dim);
-  detail::NodeLanes nl;
-  nl.build(prob);
   for (unsigned seed : {1u, 2u, 3u}) {
     const auto w = awkward_rows(prob, seed), x = awkward_rows(prob, seed + 10);
     const RelaxOut b = relax(prob, nl, w, x, false);
@@ -148,13 +151,9 @@ TEST_P(KernelsByDim, SimdRelaxationStepEqualsScalarBitForBit) {
 }
 
 TEST_P(KernelsByDim, DiskResidualIsZeroInsideAndOnTheBoundary) {
-  const int dim = GetParam();
   // e(z, rho) = max(0, 1 - rho/|z|) z: with every range set to exactly the
   // computed |z| (boundary) or larger (inside), and z = 0 for coincident rows,
   // g = 0 and x(k) = w for nodes without anchors, on both paths.
-  const LocalizationProblem prob = make_problem(dim);
-  detail::NodeLanes nl;
-  nl.build(prob);
   std::mt19937_64 gen(5);
   std::uniform_real_distribution<double> u(-1, 1);
   std::vector<double> w(std::size_t(prob.num_local()) * dim);
@@ -188,10 +187,6 @@ TEST_P(KernelsByDim, DiskResidualIsZeroInsideAndOnTheBoundary) {
 
 TEST_P(KernelsByDim, SimdMMStepEqualsScalarBitForBit) {
   if (!have_simd()) GTEST_SKIP() << "no AVX2 on this CPU";
-  const int dim = GetParam();
-  const LocalizationProblem prob = make_problem(dim);
-  detail::NodeLanes nl;
-  nl.build(prob);
   std::mt19937_64 gen(9);
   std::uniform_real_distribution<double> u(-1, 1);
   const auto x = awkward_rows(prob, 4);
