@@ -67,6 +67,9 @@ int main(int argc, char** argv) {
   s->add_option("--history-every", solve.solver.history_every, "record history every K iterations (0: auto)")
       ->capture_default_str();
   s->add_option("--bb-rounds", solve.solver.bb_rounds, "consensus rounds per BB iteration")->capture_default_str();
+  s->add_option("--temporal-block", solve.solver.temporal_block,
+                "relaxation/MM iterations per pass over memory (same iterates; tests and records at pass ends)")
+      ->capture_default_str();
   s->add_option("--json", solve.json, "write a JSON summary");
   s->add_option("--checkpoint", solve.checkpoint, "write checkpoints to this file (atomically replaced)");
   s->add_option("--checkpoint-every", solve.checkpoint_every, "checkpoint every K iterations");

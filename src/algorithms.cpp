@@ -24,7 +24,7 @@ using detail::with_ghost_rows;
 //   w = x(k-1) + (k-2)/(k+1) (x(k-1) - x(k-2)),   x(k) = w - grad f_hat(w) / L.
 class Relaxation final : public Algorithm {
  public:
-  explicit Relaxation(LocalizationProblem& prob) : prob_(prob), L_(relaxation_lipschitz(prob)) {}
+  Relaxation(LocalizationProblem& prob, int levels) : prob_(prob), L_(relaxation_lipschitz(prob)), levels_(levels) {}
   std::string name() const override { return "relaxation"; }
   double lipschitz() const override { return L_; }
   double reals_per_iteration() const override { return prob_.dim(); }
@@ -36,45 +36,60 @@ class Relaxation final : public Algorithm {
     w_next_.assign(x_.size(), 0.0);
     w_ready_ = false;
     lanes_.build(prob_);
+    plan_.build(prob_, lanes_, levels_);
+    norms_.assign(std::size_t(levels_) * 3 * detail::kMaxLanes, 0.0);
     stream_ = detail::stream_rows(4 * sizeof(double) * x_.size());
     k_ = 0;
   }
 
-  // One pass over the owned nodes, in chunks of SIMD lanes (kernels.hpp): the
-  // gradient at w, x(k) = w - g/L, the norms of the stopping tests and next
-  // iteration's extrapolation point are all computed per node (one read of w
-  // and x(k-1), one write of x(k) and w(k+1)). The norms are summed per lane,
-  // then over the lanes in lane order.
-  void iterate() override {
-    ++k_;
+  void iterate() override { iterate_levels(1); }
+  int max_levels() const override { return levels_; }
+
+  // n iterations in one pass over the owned nodes, in chunks of SIMD lanes
+  // (kernels.hpp, detail::run_levels): per node and level, the gradient at w,
+  // x(k) = w - g/L, the norms of the stopping tests and next iteration's
+  // extrapolation point (one read of w and x(k-1), one write of x(k) and
+  // w(k+1)). Level j reads w from w_ / w_next_ and x(k-1) from x_ / prev_
+  // alternately (j even / odd) and writes the other. The norms of the last
+  // level are summed per lane, then over the lanes in lane order.
+  void iterate_levels(int n) override {
     const int p = prob_.dim();
     const LocalId n_owned = prob_.num_owned();
     if (!w_ready_) {  // first iteration or after a restart
-      const double beta = static_cast<double>(k_ - 2) / static_cast<double>(k_ + 1);
+      const double beta = static_cast<double>(k_ - 1) / static_cast<double>(k_ + 2);
       const std::size_t m = std::size_t(n_owned) * p;
       for (std::size_t t = 0; t < m; ++t) w_[t] = x_[t] + beta * (x_[t] - prev_[t]);
     }
-    const double beta_next = static_cast<double>(k_ - 1) / static_cast<double>(k_ + 2);
-    std::fill(std::begin(norms_), std::end(norms_), 0.0);
-    HaloPlan& halo = prob_.graph().halo();
-    halo.begin(w_.data(), p);
-    step(0, lanes_.split, beta_next);
-    halo.end(w_.data(), p);
-    step(lanes_.split, lanes_.size(), beta_next);
+    std::fill(norms_.begin(), norms_.end(), 0.0);
+    double* const w[2] = {w_.data(), w_next_.data()};
+    double* const x[2] = {x_.data(), prev_.data()};
+    const std::int64_t k0 = k_;
+    detail::run_levels(plan_, lanes_, n, prob_.graph().halo(), w, p, [&](int j, std::int64_t c0, std::int64_t c1) {
+      const std::int64_t k = k0 + j + 1;  // the iteration this level computes
+      const double beta_next = static_cast<double>(k - 1) / static_cast<double>(k + 2);
+      // x(k) = w - g/L goes over x(k-2), which is no longer needed.
+      detail::relax_chunks(prob_, lanes_, c0, c1,
+                           {w[j & 1], x[j & 1], x[(j + 1) & 1], w[(j + 1) & 1], L_, beta_next,
+                            &norms_[std::size_t(j) * 3 * detail::kMaxLanes], stream_ && j == n - 1});
+    });
+    k_ += n;
     double sums[3];
-    detail::sum_lanes(norms_, lanes_.lanes, 3, sums);
+    detail::sum_lanes(&norms_[std::size_t(n - 1) * 3 * detail::kMaxLanes], lanes_.lanes, 3, sums);
     diff_sq_ = sums[0];
     x_sq_ = sums[1];
     gsq_ = sums[2];
-    std::swap(x_, prev_);  // x <- x(k), prev <- x(k-1)
-    std::swap(w_, w_next_);
+    if (n % 2 == 1) {
+      std::swap(x_, prev_);  // x <- x(k), prev <- x(k-1)
+      std::swap(w_, w_next_);
+    }
     w_ready_ = true;
   }
 
   const std::vector<double>& positions() const override { return x_; }
   std::int64_t memory_bytes() const override {
     return static_cast<std::int64_t>(sizeof(double) * (x_.capacity() + prev_.capacity() + w_.capacity() +
-                                                       w_next_.capacity())) + lanes_.bytes();
+                                                       w_next_.capacity() + norms_.capacity())) +
+           lanes_.bytes() + plan_.bytes();
   }
   // Per owned node: offsets and anchor offsets 16, w rows 8p (own and
   // neighbours' once, ghosts included), x(k-1) read, x(k) and w(k+1) written
@@ -106,20 +121,14 @@ class Relaxation final : public Algorithm {
   }
 
  private:
-  // Chunks [c0, c1) of nodes (kernels.hpp): g = grad f_hat(w) (003, Alg. 1
-  // steps 7-8), x(k) = w - g/L written into prev_ (x(k-2) is no longer
-  // needed), w(k+1) = x(k) + beta_next (x(k) - x(k-1)), lane sums of the norms.
-  void step(std::int64_t c0, std::int64_t c1, double beta_next) {
-    detail::relax_chunks(prob_, lanes_, c0, c1,
-                         {w_.data(), x_.data(), prev_.data(), w_next_.data(), L_, beta_next, norms_, stream_});
-  }
-
   LocalizationProblem& prob_;
   double L_;
   std::vector<double> x_, prev_, w_, w_next_;
   detail::NodeLanes lanes_;
-  double norms_[3 * detail::kMaxLanes];  // per lane: ||x(k) - x(k-1)||^2, ||x(k)||^2, ||g||^2
-  bool stream_ = false;                  // non-temporal row stores (kernels.hpp)
+  int levels_;                 // iterations per pass at most (SolverOptions::temporal_block)
+  detail::LevelPlan plan_;
+  std::vector<double> norms_;  // per level and lane: ||x(k) - x(k-1)||^2, ||x(k)||^2, ||g||^2
+  bool stream_ = false;        // non-temporal row stores (kernels.hpp)
   bool w_ready_ = false;
   std::int64_t k_ = 0;
   double diff_sq_ = 0, x_sq_ = 0, gsq_ = 0;
@@ -134,8 +143,8 @@ using detail::project_sphere;
 
 class MM final : public Algorithm {
  public:
-  explicit MM(LocalizationProblem& prob)
-      : prob_(prob), L_(2.0 * prob.max_degree() + prob.max_anchor_degree() + 2.0) {}
+  MM(LocalizationProblem& prob, int levels)
+      : prob_(prob), L_(2.0 * prob.max_degree() + prob.max_anchor_degree() + 2.0), levels_(levels) {}
   std::string name() const override { return "mm"; }
   double lipschitz() const override { return L_; }
   double reals_per_iteration() const override { return prob_.dim(); }
@@ -145,6 +154,8 @@ class MM final : public Algorithm {
     xn_ = x_;
     prob_.graph().halo().exchange(x_.data(), prob_.dim());
     lanes_.build(prob_);
+    plan_.build(prob_, lanes_, levels_);
+    norms_.assign(std::size_t(levels_) * 2 * detail::kMaxLanes, 0.0);
     if (prob_.dim() == 2)
       init<2>();
     else
@@ -152,29 +163,37 @@ class MM final : public Algorithm {
     stream_ = detail::stream_rows(sizeof(double) * (2 * x_.size() + y_.size()));
   }
 
-  // Halo begin -> interior chunks -> halo end -> boundary chunks; the norms
-  // are summed per lane, then over the lanes in lane order.
-  void iterate() override {
-    HaloPlan& halo = prob_.graph().halo();
-    std::fill(std::begin(norms_), std::end(norms_), 0.0);
-    const detail::MMStep st{x_.data(), xn_.data(), y_.data(), aw_.data(), (L_ - 1.0) / L_, 1.0 / L_, norms_,
-                            stream_};
-    halo.begin(x_.data(), prob_.dim());
-    detail::mm_chunks(prob_, lanes_, 0, lanes_.split, st);
-    halo.end(x_.data(), prob_.dim());
-    detail::mm_chunks(prob_, lanes_, lanes_.split, lanes_.size(), st);
+  void iterate() override { iterate_levels(1); }
+  int max_levels() const override { return levels_; }
+
+  // n iterations in one pass over memory (detail::run_levels; n = 1: halo
+  // begin -> interior chunks -> halo end -> boundary chunks). y is updated in
+  // place, level after level; x(t + j) alternates between x_ and xn_. The
+  // norms of the last level are summed per lane, then over the lanes in lane
+  // order. Non-temporal stores only at the last level: the others' rows are
+  // read again within the pass.
+  void iterate_levels(int n) override {
+    std::fill(norms_.begin(), norms_.end(), 0.0);
+    double* const buf[2] = {x_.data(), xn_.data()};
+    detail::run_levels(plan_, lanes_, n, prob_.graph().halo(), buf, prob_.dim(),
+                       [&](int j, std::int64_t c0, std::int64_t c1) {
+                         const detail::MMStep st{buf[j & 1], buf[(j + 1) & 1], y_.data(), aw_.data(),
+                                                 (L_ - 1.0) / L_, 1.0 / L_, &norms_[std::size_t(j) * 2 * detail::kMaxLanes],
+                                                 stream_ && j == n - 1};
+                         detail::mm_chunks(prob_, lanes_, c0, c1, st);
+                       });
     double sums[2];
-    detail::sum_lanes(norms_, lanes_.lanes, 2, sums);
+    detail::sum_lanes(&norms_[std::size_t(n - 1) * 2 * detail::kMaxLanes], lanes_.lanes, 2, sums);
     diff_sq_ = sums[0];
     x_sq_ = sums[1];
-    std::swap(x_, xn_);
+    if (n % 2 == 1) std::swap(x_, xn_);
   }
 
   const std::vector<double>& positions() const override { return x_; }
   std::int64_t memory_bytes() const override {
     return static_cast<std::int64_t>(sizeof(double) * (x_.capacity() + xn_.capacity() + y_.capacity() +
-                                                       aw_.capacity())) +
-           lanes_.bytes();
+                                                       aw_.capacity() + norms_.capacity())) +
+           lanes_.bytes() + plan_.bytes();
   }
   // Per owned node: offsets and anchor offsets 16, x rows 8p (ghosts
   // included), x(t+1) written 8p; per slot: adjacency 4, range 8, orientation
@@ -279,8 +298,10 @@ class MM final : public Algorithm {
   double L_;
   std::vector<double> x_, xn_, y_, aw_;  // y_: edge variables in the lane layout (NodeLanes::at)
   detail::NodeLanes lanes_;
-  double norms_[2 * detail::kMaxLanes];  // per lane: ||x(t+1) - x(t)||^2, ||x(t+1)||^2
-  bool stream_ = false;                  // non-temporal row stores (kernels.hpp)
+  int levels_;              // iterations per pass at most (SolverOptions::temporal_block)
+  detail::LevelPlan plan_;
+  std::vector<double> norms_;  // per level and lane: ||x(t+1) - x(t)||^2, ||x(t+1)||^2
+  bool stream_ = false;        // non-temporal row stores (kernels.hpp)
   double diff_sq_ = 0, x_sq_ = 0;
 };
 
@@ -419,8 +440,8 @@ class BB final : public Algorithm {
 
 std::unique_ptr<Algorithm> make_algorithm(const std::string& name, LocalizationProblem& prob,
                                           const SolverOptions& opt) {
-  if (name == "relaxation") return std::make_unique<Relaxation>(prob);
-  if (name == "mm") return std::make_unique<MM>(prob);
+  if (name == "relaxation") return std::make_unique<Relaxation>(prob, opt.temporal_block);
+  if (name == "mm") return std::make_unique<MM>(prob, opt.temporal_block);
   if (name == "bb") return std::make_unique<BB>(prob, opt.bb_rounds);
   if (auto a = make_sequential_algorithm(name, prob, opt)) return a;
   throw Error("unknown algorithm '" + name + "'");

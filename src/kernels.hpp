@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "snl/halo.hpp"
 #include "snl/problem.hpp"
 
 namespace snl::detail {
@@ -92,6 +93,69 @@ struct NodeLanes {
   std::int64_t bytes() const;
   void build(const LocalizationProblem& prob);
 };
+
+/// Temporal blocking of a Jacobi step over the chunks of a NodeLanes layout
+/// (plan once, run every pass): up to `levels` iterations per pass over
+/// memory, so that the edge arrays a chunk streams are reused from cache by
+/// the following levels. Level j (iteration j of the pass) reads the rows of
+/// buffer j % 2 and writes buffer (j + 1) % 2; each node does exactly the
+/// arithmetic of a plain iteration, so the iterates are the same bits.
+///
+/// Schedule (run_levels): a wavefront over the interior chunks, level j
+/// trailing level j - 1 by `skew` chunks, the largest chunk distance of any
+/// edge between two chunks that are not next to the boundary. A chunk within
+/// chunk-graph distance j of a boundary chunk (depth <= j) is not safe at
+/// level j in the wavefront (its neighbours' level j - 1 may wait for the
+/// halo); it runs after the wavefront, level by level, each level's halo
+/// exchange overlapping its interior part. Writing x(j+1) over x(j-1) is safe
+/// by the same conditions: every reader of x(j-1)[c] is a neighbour's level
+/// j - 1, already done.
+struct LevelPlan {
+  int levels = 1;
+  std::int64_t skew = 0;             ///< chunks between consecutive levels of the wavefront
+  std::int64_t block = 16;           ///< chunks per level and wavefront stage (tests vary it)
+  std::vector<std::uint8_t> depth;   ///< per chunk: distance to a boundary chunk, capped at max(levels, 2)
+  /// Per level j: runs [b, e) of interior chunks with depth <= j, ascending.
+  std::vector<std::vector<std::pair<std::int64_t, std::int64_t>>> deferred;
+  void build(const LocalizationProblem& prob, const NodeLanes& nl, int levels);
+  std::int64_t bytes() const;
+};
+
+/// One pass of n <= plan.levels iterations: step(j, c0, c1) runs level j on
+/// chunks [c0, c1). buf[j % 2] is the row array level j reads; its ghost rows
+/// are exchanged here (level 0's over the whole wavefront). With n = 1 this is
+/// the plain iteration: halo begin -> interior chunks -> halo end -> boundary.
+template <class Step>
+void run_levels(const LevelPlan& lp, const NodeLanes& nl, int n, HaloPlan& halo, double* const buf[2], int p,
+                Step&& step) {
+  const std::int64_t split = nl.split;
+  // Chunks per level and stage: the window the levels share is (n - 1) skew
+  // + block chunks.
+  const std::int64_t block = n == 1 ? std::max<std::int64_t>(split, 1) : lp.block;
+  halo.begin(buf[0], p);
+  for (std::int64_t t = 0; split > 0; ++t) {
+    for (int j = 0; j < n; ++j) {
+      const std::int64_t lo = std::max<std::int64_t>(0, t * block - j * lp.skew);
+      const std::int64_t hi = std::min(split, (t + 1) * block - j * lp.skew);
+      for (std::int64_t c = lo; c < hi;) {  // runs of chunks deeper than j
+        while (c < hi && lp.depth[c] <= j) ++c;
+        std::int64_t e = c;
+        while (e < hi && lp.depth[e] > j) ++e;
+        if (c < e) step(j, c, e);
+        c = e;
+      }
+    }
+    if ((t + 1) * block - (n - 1) * lp.skew >= split) break;
+  }
+  halo.end(buf[0], p);
+  step(0, split, nl.size());
+  for (int j = 1; j < n; ++j) {
+    halo.begin(buf[j & 1], p);
+    for (const auto& [b, e] : lp.deferred[j]) step(j, b, e);
+    halo.end(buf[j & 1], p);
+    step(j, split, nl.size());
+  }
+}
 
 /// Whether the steps should write their node rows with non-temporal stores:
 /// when `bytes` (the iterate arrays one step streams) exceed what a cache

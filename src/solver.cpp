@@ -45,6 +45,7 @@ std::string SolverOptions::validate() const {
   if (!(grad_tol >= 0) || !std::isfinite(grad_tol)) return "--grad-tol must be a finite number >= 0";
   if (history_every < 0) return "--history-every must be >= 0";
   if (bb_rounds < 1 || bb_rounds > 10000) return "--bb-rounds must be in [1, 10000]";
+  if (temporal_block < 1 || temporal_block > 64) return "--temporal-block must be in [1, 64]";
   return "";
 }
 
@@ -95,6 +96,8 @@ std::string Solver::options_fingerprint() const {
   os.precision(17);
   os << opt_.algorithm << "|max_iter=" << opt_.max_iter << "|tol=" << opt_.tol << "|grad_tol=" << opt_.grad_tol
      << "|history_every=" << opt_.history_every << "|bb_rounds=" << opt_.bb_rounds;
+  // Only when on, so that earlier checkpoints still match.
+  if (opt_.temporal_block != 1) os << "|temporal_block=" << opt_.temporal_block;
   return os.str();
 }
 
@@ -255,6 +258,11 @@ Summary Solver::solve(const std::vector<double>& x0, std::vector<double>* x_out)
       every = opt_.max_iter <= 2000 ? 1 : (opt_.max_iter + 999) / 1000;
       if (prob_.num_sensors() > 100000) every = std::max<std::int64_t>(every, 10);
     }
+    // Temporal blocking: passes of up to `block` iterations, ending at every
+    // record and checkpoint iteration (so these see the same iterates); the
+    // automatic record interval becomes a multiple of the pass.
+    const std::int64_t block = std::max(1, std::min(opt_.temporal_block, alg->max_levels()));
+    if (opt_.history_every <= 0) every = (every + block - 1) / block * block;
     double prev_obj = objective_of(*alg);
     if (k == 0) {
       sum.initial_cost = prev_obj;
@@ -274,17 +282,24 @@ Summary Solver::solve(const std::vector<double>& x0, std::vector<double>* x_out)
       const double w0 = halo.wait_seconds(), ti = MPI_Wtime();
       // A rank-local failure (std::bad_alloc) while the others wait in the
       // iteration's collectives cannot be agreed on: it aborts every rank.
+      std::int64_t n = std::min({block, opt_.max_iter - k, every - k % every});
+      if (checkpointing && ckpt_.every > 0) n = std::min(n, ckpt_.every - k % ckpt_.every);
       abort_on_local_failure(comm, "iteration", [&] {
-        test_fail_point("solve", total_it + 1);  // fault-injection tests
-        alg->iterate();
+        for (std::int64_t i = 1; i <= n; ++i) test_fail_point("solve", total_it + i);  // fault-injection tests
+        if (n == 1)
+          alg->iterate();
+        else
+          alg->iterate_levels(static_cast<int>(n));
       });
       const double dt = MPI_Wtime() - ti;
       phase_time += dt;
       iter_wait += halo.wait_seconds() - w0;
-      ++k;
-      ++total_it;
-      messages += alg->messages_per_iteration();
-      reals += alg->reals_per_iteration();
+      k += n;
+      total_it += n;
+      for (std::int64_t i = 0; i < n; ++i) {  // summed as one iteration at a time
+        messages += alg->messages_per_iteration();
+        reals += alg->reals_per_iteration();
+      }
       // One reduction per iteration: stopping sums, and flags every rank must
       // agree on (a stop signal on any rank; rank 0's checkpoint clock).
       double loc[5] = {0, 0, 0, 0, 0}, glob[5];

@@ -43,6 +43,13 @@ struct SolverOptions {
   std::int64_t history_every = 0;
   /// Consensus rounds per BB iteration (Calafiore et al. use 20).
   int bb_rounds = 20;
+  /// Temporal blocking: up to this many relaxation or MM iterations per pass over memory
+  /// (the same iterates, bit for bit, with far less memory traffic). The
+  /// stopping tests, history records, callbacks, signals and checkpoints are
+  /// then taken at the end of a pass: a pass ends at every multiple of
+  /// history_every and of the checkpoint interval and at max_iter, but a
+  /// tolerance met inside a pass stops the phase at its end. 1: off.
+  int temporal_block = 1;
   /// Check after every iteration that the MM surrogate did not increase
   /// (one extra reduction per iteration). On by default in debug builds.
 #ifdef NDEBUG
@@ -121,6 +128,13 @@ class Algorithm {
   virtual void start(const std::vector<double>& x) = 0;
   /// Collective. One iteration of the paper's update.
   virtual void iterate() = 0;
+  /// Iterations one iterate_levels() call may run (temporal blocking); 1 if none.
+  virtual int max_levels() const { return 1; }
+  /// Collective. n <= max_levels() iterations, the same iterates as n calls of
+  /// iterate(); change_norms() and grad_norm_sq() then refer to the last.
+  virtual void iterate_levels(int n) {
+    for (int j = 0; j < n; ++j) iterate();
+  }
   /// Current iterate; owned rows valid.
   virtual const std::vector<double>& positions() const = 0;
   /// Collective: the objective the method minimizes at the current iterate.

@@ -36,6 +36,16 @@ while read -r f; do
   case $name in corrupt_*|no_anchors) ;; *) [ $rc -ne 0 ] || fail "info accepted $name";; esac
 done < "$T/list"
 echo "bad_input: $n failing runs checked"
+# Invalid solver options: one clear message, a non-zero exit, the output untouched.
+for bad in "--temporal-block 0" "--temporal-block 65" "--max-iter -1"; do
+  set +e
+  # shellcheck disable=SC2086
+  mpi 2 "$SNL" solve "$T/net.h5" -o "$T/keep.h5" $bad -q > /dev/null 2> "$T/err"; rc=$?
+  set -e
+  [ $rc -ne 0 ] && [ $rc -lt 128 ] || fail "$bad: exit status $rc"
+  [ "$(grep -c '^snl: error: ' "$T/err")" -eq 1 ] || { cat "$T/err"; fail "$bad: expected exactly one error message"; }
+  [ "$(md5sum < "$T/keep.h5")" = "$sum0" ] || fail "$bad: existing output was modified"
+done
 # Output directory missing, and an unwritable output: clear errors, no hang.
 set +e
 mpi 2 "$SNL" solve "$T/net.h5" -o "$T/nope/r.h5" -q 2> "$T/err"; rc=$?

@@ -10,13 +10,16 @@ source "$(dirname "$0")/common.bash"
 "$SNL" generate -o "$T/small.h5" --sensors 400 --avg-degree 7 --sigma 0.05 --seed 23 -q
 "$SNL" generate -o "$T/net3.h5" --sensors 3000 --dim 3 --avg-degree 7 --sigma 0.05 --seed 24 -q
 # mm3: MM on a 3D network (3D SIMD kernels, 3D edge variables in the checkpoint).
-for case in async pipeline bb mm3 mm; do  # mm last: the refusals below use its checkpoint
-  alg=${case%3}
+# pipeline4: four iterations per pass over memory (--temporal-block 4); its
+# signal checkpoints fall on pass ends, and its positions equal pipeline's.
+for case in async pipeline pipeline4 bb mm3 mm; do  # mm last: the refusals below use its checkpoint
+  alg=${case%[34]}
   ARGS=(--max-iter 4000 --tol 0 -q)
   NET="$T/net.h5"
   EVERY=100
   if [ $case = async ]; then ARGS=(--max-iter 300 --tol 0 -q); NET="$T/small.h5"; EVERY=10; fi
   if [ $case = mm3 ]; then NET="$T/net3.h5"; fi
+  if [ $case = pipeline4 ]; then ARGS+=(--temporal-block 4); EVERY=50; fi
   mpi 2 "$SNL" solve "$NET" -o "$T/ref.$case.h5" --algorithm $alg "${ARGS[@]}"
   # Stop a run with SIGUSR1 after it has written some checkpoints.
   rm -f "$T/ck.h5"
@@ -41,6 +44,7 @@ for case in async pipeline bb mm3 mm; do  # mm last: the refusals below use its 
     h5diff "$T/ref.$case.h5" "$T/res.$case.$np.h5" /positions || fail "$case: restart on $np ranks differs"
   done
 done
+h5diff "$T/ref.pipeline.h5" "$T/ref.pipeline4.h5" /positions || fail "--temporal-block 4 changed the positions"
 ARGS=(--max-iter 4000 --tol 0 -q)
 # Refusals: another network, other options, damaged files.
 expect_error() {  # expect_error PATTERN cmd...
@@ -51,6 +55,8 @@ expect_error() {  # expect_error PATTERN cmd...
 }
 expect_error "another network" mpi 2 "$SNL" solve "$T/other.h5" -o "$T/x.h5" --algorithm bb "${ARGS[@]}" --restart "$T/ck.h5"
 expect_error "incompatible options" mpi 2 "$SNL" solve "$T/net.h5" -o "$T/x.h5" --algorithm bb --max-iter 99 -q --restart "$T/ck.h5"
+expect_error "incompatible options" mpi 2 "$SNL" solve "$T/net.h5" -o "$T/x.h5" --algorithm mm "${ARGS[@]}" \
+  --temporal-block 2 --restart "$T/ck.h5"
 head -c 3000 "$T/ck.h5" > "$T/trunc.h5"
 expect_error "trunc.h5" mpi 2 "$SNL" solve "$T/net.h5" -o "$T/x.h5" --algorithm bb "${ARGS[@]}" --restart "$T/trunc.h5"
 expect_error "not an snl checkpoint" mpi 1 "$SNL" solve "$T/net.h5" -o "$T/x.h5" --algorithm bb "${ARGS[@]}" --restart "$T/net.h5"
