@@ -10,7 +10,8 @@
 #   SIZES="1000000" ITERS=200 bench/scaling.sh
 # Environment: BIN (default build/bin), WORK (scratch dir, default
 # /tmp/snl-scaling), SIZES, RANKS ("1 2"), ITERS, PARTITION (metis|block),
-# ALGS ("relaxation mm"), WEAK (1: weak-scaling runs, default 1), KEEP (1: keep files).
+# ALGS ("relaxation mm"), WEAK (1: weak-scaling runs, default 1), KEEP (1: keep files),
+# BLOCK (--temporal-block: iterations per pass over memory, default 1).
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 BIN=${BIN:-$here/build/bin}
@@ -21,6 +22,7 @@ ITERS=${ITERS:-1000}
 PARTITION=${PARTITION:-metis}
 ALGS=${ALGS:-"relaxation mm"}
 WEAK=${WEAK:-1}
+BLOCK=${BLOCK:-1}
 export OMPI_ALLOW_RUN_AS_ROOT=${OMPI_ALLOW_RUN_AS_ROOT:-1} OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=${OMPI_ALLOW_RUN_AS_ROOT_CONFIRM:-1}
 mkdir -p "$WORK"
 rec="$WORK/records.jsonl"
@@ -57,7 +59,8 @@ solve() {  # n ranks alg kind
   log "solve n=$n ranks=$np $alg ($ITERS iterations)"
   b0=$(triad "$np")
   mpirun -np "$np" "$BIN/snl" solve "$WORK/net_$n.h5" -o "$WORK/r_${n}_${np}_${alg}.h5" --algorithm "$alg" \
-    --max-iter "$ITERS" --tol 0 --history-every "$ITERS" --partition "$PARTITION" --json "$js" -q
+    --max-iter "$ITERS" --tol 0 --history-every "$ITERS" --partition "$PARTITION" --temporal-block "$BLOCK" \
+    --json "$js" -q
   b1=$(triad "$np")
   python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); d["kind"]=sys.argv[2]
 d["stream_before_gbs"], d["stream_after_gbs"] = float(sys.argv[3]), float(sys.argv[4]); print(json.dumps(d))' \

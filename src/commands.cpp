@@ -326,6 +326,7 @@ int run_solve(const SolveCommand& cmd, MPI_Comm comm) {
                     {"wall_seconds", s.wall_seconds},
                     {"ranks", double(s.ranks)},
                     {"seed", double(cmd.solver.seed)},
+                    {"temporal_block", double(cmd.solver.temporal_block)},
                     {"lipschitz", s.lipschitz}};
   if (s.errors.valid) {
     r.double_attrs.push_back({"rmse", s.errors.rmse});
@@ -394,6 +395,7 @@ int run_solve(const SolveCommand& cmd, MPI_Comm comm) {
     for (const auto& ph : s.phase_traffic_bytes)
       if (std::isfinite(ph.second)) j.add(ph.first + "_traffic_bytes_per_iteration", ph.second);
     j.add("simd", detail::simd_name());
+    j.add("temporal_block", cmd.solver.temporal_block);
     for (const auto& ph : rep.setup_phases) j.add("setup_" + ph.first + "_seconds", ph.second);
     if (s.errors.valid) {
       j.add("rmse", s.errors.rmse).add("mpe", s.errors.mpe);

@@ -163,10 +163,16 @@ void sort_degree_windows(std::vector<std::int64_t>& grp, const std::vector<std::
 // Reverse Cuthill-McKee of the graph (cnt, nbrs) restricted to `nodes` (one
 // group: interior or boundary): BFS from a pseudo-peripheral node (George-Liu,
 // one sweep), children by increasing degree, then reversed. `pos[v]` is v's
-// position in `nodes` or -1 for nodes outside the group. Deterministic: ties
-// are broken by the order of `nodes` (global id order).
+// position in `nodes` or -1 for nodes outside the group. With `seeds`
+// (positions in `nodes`), the first BFS starts from all of them at once, as
+// its first level: the interior group is seeded with its nodes next to the
+// boundary, so that after the reversal the interior runs from the nodes
+// farthest from the boundary to those next to it, in layers (temporal
+// blocking defers the chunks near the boundary: they are then contiguous).
+// Deterministic: ties are broken by the order of `nodes` (global id order).
 std::vector<std::int64_t> rcm_order(const std::vector<std::int64_t>& nodes, const std::vector<std::int64_t>& cnt,
-                                    const std::vector<std::int64_t>& nbrs, const std::vector<std::int64_t>& pos) {
+                                    const std::vector<std::int64_t>& nbrs, const std::vector<std::int64_t>& pos,
+                                    const std::vector<std::int64_t>& seeds) {
   const std::size_t m = nodes.size();
   // The group's own adjacency in group positions (32-bit), neighbours in the
   // same order as in `nbrs`: the scattered nodes -> cnt -> nbrs -> pos lookups
@@ -220,12 +226,8 @@ std::vector<std::int64_t> rcm_order(const std::vector<std::int64_t>& nodes, cons
     for (std::size_t d = 1; d < start.size(); ++d) start[d] += start[d - 1];
     for (std::size_t t = 0; t < m; ++t) by_deg[start[deg[t]]++] = static_cast<std::int64_t>(t);
   }
-  for (std::int64_t cand : by_deg) {
-    if (seen[cand]) continue;
-    const std::int64_t s = bfs_far(cand);
-    std::size_t head = order.size();
-    order.push_back(s);
-    seen[s] = 1;
+  // One Cuthill-McKee BFS from the nodes already appended at `head`.
+  auto cuthill_mckee = [&](std::size_t head) {
     for (; head < order.size(); ++head) {
       const std::int64_t t = order[head];
       kids.clear();
@@ -246,6 +248,20 @@ std::vector<std::int64_t> rcm_order(const std::vector<std::int64_t>& nodes, cons
       }
       order.insert(order.end(), kids.begin(), kids.end());
     }
+  };
+  for (std::int64_t t : seeds)
+    if (!seen[t]) {
+      seen[t] = 1;
+      order.push_back(t);
+    }
+  cuthill_mckee(0);
+  for (std::int64_t cand : by_deg) {  // components without seeds
+    if (seen[cand]) continue;
+    const std::int64_t s = bfs_far(cand);
+    const std::size_t head = order.size();
+    order.push_back(s);
+    seen[s] = 1;
+    cuthill_mckee(head);
   }
   std::reverse(order.begin(), order.end());
   for (auto& t : order) t = nodes[t];
@@ -329,9 +345,15 @@ DistGraph::DistGraph(MPI_Comm comm, GlobalId n, const std::vector<int>& owner, c
       std::vector<std::int64_t> nbrs(entries.size());
       for (std::size_t k = 0; k < entries.size(); ++k) nbrs[k] = owned_index(entries[k].nbr);
       std::vector<std::int64_t> pos(owned.size(), -1);
-      for (auto& grp : group) {
+      std::vector<std::int64_t> seeds;
+      for (int gi : {1, 0}) {  // the boundary first: its order seeds the interior's
+        auto& grp = group[gi];
         for (std::size_t t = 0; t < grp.size(); ++t) pos[grp[t]] = static_cast<std::int64_t>(t);
-        grp = rcm_order(grp, cnt, nbrs, pos);
+        if (gi == 0)  // interior nodes next to the boundary, in the boundary's order
+          for (auto b : group[1])
+            for (auto k = cnt[b]; k < cnt[b + 1]; ++k)
+              if (nbrs[k] >= 0 && !boundary[nbrs[k]]) seeds.push_back(pos[nbrs[k]]);
+        grp = rcm_order(grp, cnt, nbrs, pos, seeds);
         for (auto v : grp) pos[v] = -1;
         sort_degree_windows(grp, cnt);
       }

@@ -279,17 +279,14 @@ Summary Solver::solve(const std::vector<double>& x0, std::vector<double>* x_out)
     TerminationType term = TerminationType::kNoConvergence;
     std::string msg;
     while (k < opt_.max_iter) {
+      std::int64_t n = std::min({block, opt_.max_iter - k, every - k % every});  // iterations in this pass
+      if (checkpointing && ckpt_.every > 0) n = std::min(n, ckpt_.every - k % ckpt_.every);
       const double w0 = halo.wait_seconds(), ti = MPI_Wtime();
       // A rank-local failure (std::bad_alloc) while the others wait in the
       // iteration's collectives cannot be agreed on: it aborts every rank.
-      std::int64_t n = std::min({block, opt_.max_iter - k, every - k % every});
-      if (checkpointing && ckpt_.every > 0) n = std::min(n, ckpt_.every - k % ckpt_.every);
       abort_on_local_failure(comm, "iteration", [&] {
         for (std::int64_t i = 1; i <= n; ++i) test_fail_point("solve", total_it + i);  // fault-injection tests
-        if (n == 1)
-          alg->iterate();
-        else
-          alg->iterate_levels(static_cast<int>(n));
+        alg->iterate_levels(static_cast<int>(n));
       });
       const double dt = MPI_Wtime() - ti;
       phase_time += dt;
@@ -300,7 +297,7 @@ Summary Solver::solve(const std::vector<double>& x0, std::vector<double>* x_out)
         messages += alg->messages_per_iteration();
         reals += alg->reals_per_iteration();
       }
-      // One reduction per iteration: stopping sums, and flags every rank must
+      // One reduction per pass: stopping sums, and flags every rank must
       // agree on (a stop signal on any rank; rank 0's checkpoint clock).
       double loc[5] = {0, 0, 0, 0, 0}, glob[5];
       alg->change_norms(&loc[0], &loc[1]);

@@ -202,7 +202,7 @@ TEST(TemporalBlock, SameIteratesForAnyBlockAndRankCount) {
       detail::LevelPlan lp;
       lp.build(prob, nl, 3);
       EXPECT_GT(lp.skew, 0);
-      EXPECT_LT(4 * std::max<std::int64_t>(lp.skew, 16), nl.split) << "too few chunks for a wavefront";
+      EXPECT_LT(2 * lp.block, nl.split) << "too few chunks for a wavefront of several stages";
       auto deferred = [&](int j) {
         std::int64_t c = 0;
         for (const auto& [b, e] : lp.deferred[j]) c += e - b;
