@@ -67,7 +67,8 @@ class Relaxation final : public Algorithm {
     detail::run_levels(plan_, lanes_, n, prob_.graph().halo(), w, p, [&](int j, std::int64_t c0, std::int64_t c1) {
       const std::int64_t k = k0 + j + 1;  // the iteration this level computes
       const double beta_next = static_cast<double>(k - 1) / static_cast<double>(k + 2);
-      // x(k) = w - g/L goes over x(k-2), which is no longer needed.
+      // g = grad f_hat(w) (003, Alg. 1 steps 7-8); x(k) = w - g/L goes over
+      // x(k-2), which is no longer needed; w(k+1) = x(k) + beta_next (x(k) - x(k-1)).
       detail::relax_chunks(prob_, lanes_, c0, c1,
                            {w[j & 1], x[j & 1], x[(j + 1) & 1], w[(j + 1) & 1], L_, beta_next,
                             &norms_[std::size_t(j) * 3 * detail::kMaxLanes], stream_ && j == n - 1});
