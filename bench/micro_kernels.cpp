@@ -1,8 +1,9 @@
 // Google Benchmark micro-benchmarks of the iteration kernels, through the
 // public API: the gradient of f_hat (003, Alg. 1), one MM iteration (000,
-// Alg. 1; halo and norms included), one relaxation iteration, and the halo
-// pack/exchange/unpack. Each kernel runs with the RCM local order and with the
-// global-id order (arg 1 = rcm, 0 = gid), to measure the locality effect.
+// Alg. 1; halo and norms included), one relaxation iteration, one pass of S
+// iterations with temporal blocking, and the halo pack/exchange/unpack. Each
+// kernel runs with the RCM local order and with the global-id order (arg 1 =
+// rcm, 0 = gid), to measure the locality effect (BM_Pass: arg = S, RCM).
 //
 //   build/bench/snl_micro [--benchmark_filter=...]          (1 rank)
 //   mpirun -np 2 build/bench/snl_micro --benchmark_filter=Halo (2 ranks)
@@ -104,6 +105,20 @@ void BM_Iteration(benchmark::State& st) {
 constexpr char kMM[] = "mm";
 constexpr char kRelax[] = "relaxation";
 
+// One pass of S = range(0) iterations with temporal blocking (RCM order):
+// the time shown is per pass; s_per_iteration divides it by S.
+template <const char* kName>
+void BM_Pass(benchmark::State& st) {
+  auto& prob = problem(true);
+  SolverOptions opt;
+  opt.temporal_block = static_cast<int>(st.range(0));
+  auto alg = make_algorithm(kName, prob, opt);
+  alg->start(random_initial_positions(prob, 1));
+  for (auto _ : st) alg->iterate_levels(opt.temporal_block);
+  st.counters["s_per_iteration"] = benchmark::Counter(
+      double(opt.temporal_block), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+}
+
 // Fraction of directed sensor edges whose current length is within the range
 // (|x_v - x_u| <= rho: the disk term is zero); it grows from ~0 at a random
 // start towards 1, and says which state an iteration was timed in (2D).
@@ -153,6 +168,8 @@ BENCHMARK_TEMPLATE(BM_Iteration, kRelax)->Arg(1)->Arg(0)->Iterations(30)->Unit(b
 BENCHMARK_TEMPLATE(BM_Iteration, kMM)->Arg(1)->Arg(0)->Iterations(30)->Unit(benchmark::kMillisecond);
 BENCHMARK_TEMPLATE(BM_IterationAfter, kRelax)->Arg(100)->Arg(300)->Arg(1000)->Iterations(30)->Unit(benchmark::kMillisecond);
 BENCHMARK_TEMPLATE(BM_IterationAfter, kMM)->Arg(300)->Iterations(30)->Unit(benchmark::kMillisecond);
+BENCHMARK_TEMPLATE(BM_Pass, kRelax)->Arg(1)->Arg(4)->Arg(8)->Iterations(10)->Unit(benchmark::kMillisecond);
+BENCHMARK_TEMPLATE(BM_Pass, kMM)->Arg(1)->Arg(4)->Arg(8)->Iterations(10)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_HaloExchange)->Arg(1)->Iterations(2000)->Unit(benchmark::kMicrosecond);
 
 class NullReporter : public benchmark::BenchmarkReporter {
