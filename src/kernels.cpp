@@ -704,7 +704,6 @@ void LevelPlan::build(const LocalizationProblem& prob, const NodeLanes& nl, int 
   const auto& adj = gr.adjacency();
   const std::int64_t chunks = nl.size(), split = nl.split;
   const int cap = std::max(n_levels, 2);
-  levels = n_levels;
   skew = 0;
   depth.assign(std::size_t(chunks), std::uint8_t(cap));
   std::fill(depth.begin() + split, depth.end(), std::uint8_t(0));

@@ -111,7 +111,6 @@ struct NodeLanes {
 /// by the same conditions: every reader of x(j-1)[c] is a neighbour's level
 /// j - 1, already done.
 struct LevelPlan {
-  int levels = 1;
   std::int64_t skew = 0;             ///< chunks between consecutive levels of the wavefront
   std::int64_t block = 16;           ///< chunks per level and wavefront stage (tests vary it)
   std::vector<std::uint8_t> depth;   ///< per chunk: distance to a boundary chunk, capped at max(levels, 2)
@@ -121,10 +120,11 @@ struct LevelPlan {
   std::int64_t bytes() const;
 };
 
-/// One pass of n <= plan.levels iterations: step(j, c0, c1) runs level j on
-/// chunks [c0, c1). buf[j % 2] is the row array level j reads; its ghost rows
-/// are exchanged here (level 0's over the whole wavefront). With n = 1 this is
-/// the plain iteration: halo begin -> interior chunks -> halo end -> boundary.
+/// One pass of n iterations (n <= the levels the plan was built for, the size
+/// of `deferred`): step(j, c0, c1) runs level j on chunks [c0, c1).
+/// buf[j % 2] is the row array level j reads; its ghost rows are exchanged
+/// here (level 0's over the whole wavefront). With n = 1 this is the plain
+/// iteration: halo begin -> interior chunks -> halo end -> boundary.
 template <class Step>
 void run_levels(const LevelPlan& lp, const NodeLanes& nl, int n, HaloPlan& halo, double* const buf[2], int p,
                 Step&& step) {
