@@ -7,9 +7,9 @@
 #include <cstdlib>
 #include <string>
 
-#include "snl/commands.hpp"
-#include "snl/h5file.hpp"
-#include "snl/mpi_util.hpp"
+#include "snl/cli/commands.hpp"
+#include "snl/io/h5file.hpp"
+#include "snl/core/mpi_util.hpp"
 
 namespace {
 

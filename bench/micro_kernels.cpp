@@ -18,10 +18,10 @@
 #include <map>
 #include <memory>
 
-#include "snl/generate.hpp"
-#include "snl/metrics.hpp"
-#include "snl/problem.hpp"
-#include "snl/solver.hpp"
+#include "snl/problem/generate.hpp"
+#include "snl/problem/metrics.hpp"
+#include "snl/problem/problem.hpp"
+#include "snl/solvers/solver.hpp"
 
 namespace {
 

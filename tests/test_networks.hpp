@@ -6,9 +6,9 @@
 #include <cmath>
 #include <vector>
 
-#include "snl/network.hpp"
-#include "snl/problem.hpp"
-#include "snl/random.hpp"
+#include "snl/io/network.hpp"
+#include "snl/problem/problem.hpp"
+#include "snl/core/random.hpp"
 
 namespace snl::test {
 

@@ -19,9 +19,9 @@
 #include <string>
 #include <vector>
 
-#include "snl/json.hpp"
-#include "snl/network.hpp"
-#include "snl/result_io.hpp"
+#include "core/json.hpp"
+#include "snl/io/network.hpp"
+#include "snl/io/result_io.hpp"
 
 namespace {
 

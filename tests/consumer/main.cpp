@@ -3,8 +3,8 @@
 
 #include <cstdio>
 
-#include "snl/generate.hpp"
-#include "snl/solver.hpp"
+#include "snl/problem/generate.hpp"
+#include "snl/solvers/solver.hpp"
 
 int main(int argc, char** argv) {
   MPI_Init(&argc, &argv);

@@ -15,7 +15,7 @@
 #include <utility>
 #include <vector>
 
-#include "snl/network.hpp"
+#include "snl/io/network.hpp"
 
 namespace {
 

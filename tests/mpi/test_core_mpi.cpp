@@ -7,10 +7,10 @@
 #include <cmath>
 #include <cstring>
 
-#include "kernels.hpp"
-#include "snl/metrics.hpp"
-#include "snl/reference.hpp"
-#include "snl/solver.hpp"
+#include "kernels/kernels.hpp"
+#include "snl/problem/metrics.hpp"
+#include "reference/reference.hpp"
+#include "snl/solvers/solver.hpp"
 #include "test_networks.hpp"
 
 using namespace snl;

@@ -7,10 +7,10 @@
 #include <cmath>
 #include <limits>
 
-#include "snl/h5file.hpp"
-#include "snl/mpi_util.hpp"
-#include "snl/network.hpp"
-#include "snl/result_io.hpp"
+#include "snl/io/h5file.hpp"
+#include "snl/core/mpi_util.hpp"
+#include "snl/io/network.hpp"
+#include "snl/io/result_io.hpp"
 #include "test_util.hpp"
 
 using namespace snl;

@@ -7,8 +7,8 @@
 #include <cmath>
 #include <vector>
 
-#include "snl/analysis.hpp"
-#include "snl/generate.hpp"
+#include "snl/problem/analysis.hpp"
+#include "snl/problem/generate.hpp"
 
 namespace {
 

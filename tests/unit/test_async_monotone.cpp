@@ -2,7 +2,7 @@
 // delta_i + |A_i|): no activation increases f_hat, exact or inexact (eq. 20).
 #include <gtest/gtest.h>
 
-#include "snl/reference.hpp"
+#include "reference/reference.hpp"
 #include "test_networks.hpp"
 
 using namespace snl;

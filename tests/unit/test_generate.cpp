@@ -6,9 +6,9 @@
 #include <tuple>
 #include <vector>
 
-#include "snl/analysis.hpp"
-#include "snl/generate.hpp"
-#include "snl/random.hpp"
+#include "snl/problem/analysis.hpp"
+#include "snl/problem/generate.hpp"
+#include "snl/core/random.hpp"
 
 namespace {
 

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "kernels.hpp"
+#include "kernels/kernels.hpp"
 #include "test_networks.hpp"
 
 using namespace snl;

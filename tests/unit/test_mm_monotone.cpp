@@ -4,8 +4,8 @@
 // throws on any increase), which must agree.
 #include <gtest/gtest.h>
 
-#include "snl/reference.hpp"
-#include "snl/solver.hpp"
+#include "reference/reference.hpp"
+#include "snl/solvers/solver.hpp"
 #include "test_networks.hpp"
 
 using namespace snl;

@@ -10,9 +10,9 @@
 #include <limits>
 #include <map>
 
-#include "snl/h5file.hpp"
-#include "snl/network.hpp"
-#include "snl/result_io.hpp"
+#include "snl/io/h5file.hpp"
+#include "snl/io/network.hpp"
+#include "snl/io/result_io.hpp"
 #include "test_util.hpp"
 
 using namespace snl;

@@ -7,7 +7,7 @@
 #include <numeric>
 #include <random>
 
-#include "snl/network.hpp"
+#include "snl/io/network.hpp"
 
 using namespace snl;
 

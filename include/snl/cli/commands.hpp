@@ -1,0 +1,84 @@
+#pragma once
+// The subcommands of the `snl` executable, as library functions so that the
+// app stays thin and tests can call them. Each is collective over `comm` and
+// throws snl::Error (identical on every rank) on failure.
+#include <mpi.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "snl/problem/generate.hpp"
+#include "snl/solvers/solver.hpp"
+
+namespace snl {
+
+struct GenerateCommand {
+  std::string output;
+  GenerateOptions options;
+  bool quiet = false;
+};
+void run_generate(const GenerateCommand& cmd, MPI_Comm comm);
+
+struct InfoCommand {
+  std::string network;
+  std::string json;  ///< optional summary file
+  bool strict = false;  ///< non-zero exit if some sensor cannot be localized
+};
+void run_info(const InfoCommand& cmd, MPI_Comm comm);
+
+struct SolveCommand {
+  std::string network;
+  std::string output;
+  std::string init = "random";  ///< "random" or a file with dataset `positions`
+  std::string json;
+  std::string partition = "metis";
+  SolverOptions solver;
+  std::string checkpoint;               ///< --checkpoint CKPT.h5
+  std::int64_t checkpoint_every = 0;    ///< --checkpoint-every K (iterations)
+  double checkpoint_seconds = 0;        ///< --checkpoint-seconds S (wall clock)
+  std::string restart;                  ///< --restart CKPT.h5
+  bool quiet = false;
+  bool strict = false;  ///< refuse networks with unlocalizable sensors
+  double progress_seconds = 2.0;
+};
+/// Returns the process exit status (0 on success).
+int run_solve(const SolveCommand& cmd, MPI_Comm comm);
+
+struct EvalCommand {
+  std::string network;
+  std::string result;
+  bool crlb = false;
+  double sigma = -1;  ///< < 0: the network's sigma
+  std::string json;
+};
+void run_eval(const EvalCommand& cmd, MPI_Comm comm);
+
+struct ExperimentCommand {
+  std::string network;            ///< fixed geometry (truth, edges, anchors)
+  std::string output;             ///< tidy per-trial CSV
+  std::string trajectory;         ///< optional CSV: ML cost vs communications
+  std::string h5;                 ///< optional HDF5 copy of the per-trial table
+  std::vector<double> sigmas = {0.01, 0.05, 0.1};
+  int trials = 100;
+  std::vector<std::string> algorithms = {"mm", "bb"};
+  double budget = 20000;          ///< reals per sensor for each refinement method
+  double relax_tol = 1e-6;        ///< relaxation stopping rule (003, Sec. V)
+  std::int64_t relax_max_iter = 100000;
+  std::int64_t points = 200;      ///< trajectory points per run
+  int bb_rounds = 20;
+  double reach_rel = 1e-3;
+  std::string start = "relaxation";  ///< methods start from the relaxation's output, or from random
+  double tol = 0;                 ///< methods' relative-improvement tolerance (0: spend the whole budget)        ///< "reached the best cost" = within this relative margin
+  std::uint64_t seed = 1;
+  std::string partition = "metis";
+  bool quiet = false;
+};
+/// Monte Carlo study over noise draws (issue: experiment driver). Collective.
+void run_experiment(const ExperimentCommand& cmd, MPI_Comm comm);
+
+/// Checks on rank 0 that `path` can be created (its directory exists and is
+/// writable); every rank throws the same error otherwise.
+void check_output_path(const std::string& path, MPI_Comm comm);
+
+}  // namespace snl

@@ -1,0 +1,150 @@
+#pragma once
+// Problem-agnostic distributed graph: partitioning, local numbering (owned
+// interior, owned boundary, then ghosts), per-edge data and the halo plan.
+// The localization problem is one client; the consensus problem another.
+#include <mpi.h>
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "snl/core/common.hpp"
+#include "snl/graph/halo.hpp"
+
+namespace snl {
+
+enum class PartitionMethod { kMetis, kBlock };
+PartitionMethod parse_partition_method(const std::string& s);  // "metis" | "block"
+
+struct PartitionStats {
+  std::string method;          ///< what was actually used ("metis" or "block")
+  std::string note;            ///< why a fallback happened, if it did
+  GlobalId edge_cut = 0;       ///< undirected edges whose ends live on different ranks
+  double imbalance = 1.0;      ///< max owned / mean owned
+  GlobalId total_ghosts = 0;   ///< sum over ranks
+  GlobalId max_ghosts = 0;
+  double seconds = 0.0;
+  /// Seconds of its phases on this rank: gather (the edge lists to rank 0),
+  /// metis_graph (METIS's CSR), metis (the call), bcast (the owners), stats.
+  std::vector<std::pair<std::string, double>> phases;
+};
+
+/// Collective. Owner rank of every global node, identical on every rank.
+/// `edges`: this rank's share of the undirected edges (pairs of global ids),
+/// each edge given once overall. METIS k-way runs on rank 0 (Debian's METIS has
+/// 32-bit idx_t: graphs too large for it fall back to block with a note).
+std::vector<int> partition_graph(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges,
+                                 PartitionMethod method, PartitionStats* stats);
+
+/// Collective all-to-all of trivially copyable records: out[r] goes to rank r;
+/// returns what this rank received, concatenated in rank order.
+template <class T>
+std::vector<T> exchange_records(MPI_Comm comm, const std::vector<std::vector<T>>& out);
+
+/// Order of the owned nodes inside the interior and boundary groups.
+/// kRcm: reverse Cuthill-McKee on the owned subgraph, so that neighbours are
+/// close in memory (the generator numbers sensors in random spatial order, and
+/// global-id order makes every neighbour access a cache miss). kGlobalId: the
+/// old order, kept for measurement. Results do not depend on it: every node
+/// still sums its neighbours in global-id order.
+enum class LocalOrdering { kRcm, kGlobalId };
+/// kRcm unless the environment sets SNL_LOCAL_ORDER=gid (for benchmarks).
+LocalOrdering default_local_ordering();
+
+class DistGraph {
+ public:
+  DistGraph() = default;
+  /// Collective. `owner`: owner rank of every global node. `edges`: this
+  /// rank's share of the undirected edges (global pairs, each edge once
+  /// overall, any rank may hold any edge), with `width` doubles of data each
+  /// in `edge_values`. `halo_width`: most doubles per node the halo carries.
+  DistGraph(MPI_Comm comm, GlobalId n, const std::vector<int>& owner, const std::vector<GlobalId>& edges,
+            const std::vector<double>& edge_values, int width, int halo_width,
+            LocalOrdering ordering = default_local_ordering());
+
+  MPI_Comm comm() const { return comm_; }
+  GlobalId num_global() const { return n_global_; }
+  LocalId num_owned() const { return n_owned_; }
+  /// Owned nodes [0, num_interior()) have no ghost neighbour.
+  LocalId num_interior() const { return n_interior_; }
+  LocalId num_ghosts() const { return static_cast<LocalId>(local_to_global_.size()) - n_owned_; }
+  LocalId num_local() const { return static_cast<LocalId>(local_to_global_.size()); }
+  const std::vector<GlobalId>& local_to_global() const { return local_to_global_; }
+  GlobalId global_id(LocalId v) const { return local_to_global_[v]; }
+
+  /// Neighbours of owned node v: adjacency()[offsets()[v] .. offsets()[v+1]),
+  /// sorted by global id (the fixed summation order that makes results
+  /// independent of the number of ranks), with edge_value(e, c) alongside.
+  const std::vector<std::int64_t>& offsets() const { return offsets_; }
+  const std::vector<LocalId>& adjacency() const { return adjacency_; }
+  double edge_value(std::int64_t e, int c = 0) const { return edge_values_[e * width_ + c]; }
+  const std::vector<double>& edge_values() const { return edge_values_; }
+  /// For clients that redraw edge data in place (Monte Carlo over noise).
+  std::vector<double>& mutable_edge_values() { return edge_values_; }
+  int edge_width() const { return width_; }
+  LocalId degree(LocalId v) const { return static_cast<LocalId>(offsets_[v + 1] - offsets_[v]); }
+  LocalId max_degree() const;  ///< global (collective)
+
+  HaloPlan& halo() { return halo_; }
+  const HaloPlan& halo() const { return halo_; }
+
+  /// Seconds spent in the constructor's phases on this rank (exchange, csr,
+  /// order, halo), for the setup report.
+  const std::vector<std::pair<std::string, double>>& build_phases() const { return build_phases_; }
+
+  /// Bytes held by the graph's arrays (capacities), halo buffers included.
+  std::int64_t memory_bytes() const;
+
+  /// Map of owned global id -> local id, by binary search over the owned
+  /// nodes (kept sorted in owned_sorted_). Returns -1 if not owned.
+  LocalId owned_local(GlobalId g) const;
+
+ private:
+  MPI_Comm comm_ = MPI_COMM_NULL;
+  GlobalId n_global_ = 0;
+  LocalId n_owned_ = 0, n_interior_ = 0;
+  int width_ = 0;
+  std::vector<GlobalId> local_to_global_;
+  std::vector<std::pair<std::string, double>> build_phases_;
+  std::vector<std::int64_t> offsets_;
+  std::vector<LocalId> adjacency_;
+  std::vector<double> edge_values_;
+  std::vector<std::pair<GlobalId, LocalId>> owned_sorted_;
+  HaloPlan halo_;
+};
+
+// ---- template implementation ----
+template <class T>
+std::vector<T> exchange_records(MPI_Comm comm, const std::vector<std::vector<T>>& out) {
+  int size = 1;
+  MPI_Comm_size(comm, &size);
+  MPI_Datatype rec;
+  MPI_Type_contiguous(static_cast<int>(sizeof(T)), MPI_BYTE, &rec);
+  MPI_Type_commit(&rec);
+  std::vector<int> scount(size), rcount(size), sdisp(size), rdisp(size);
+  std::int64_t stot = 0;
+  for (int r = 0; r < size; ++r) {
+    if (out[r].size() > static_cast<std::size_t>(INT32_MAX)) throw Error("exchange_records: message too large");
+    scount[r] = static_cast<int>(out[r].size());
+    stot += scount[r];
+  }
+  if (stot > INT32_MAX) throw Error("exchange_records: send volume exceeds 2^31 records");
+  MPI_Alltoall(scount.data(), 1, MPI_INT, rcount.data(), 1, MPI_INT, comm);
+  std::int64_t rtot = 0;
+  for (int r = 0; r < size; ++r) {
+    sdisp[r] = static_cast<int>(r == 0 ? 0 : sdisp[r - 1] + scount[r - 1]);
+    rdisp[r] = static_cast<int>(rtot);
+    rtot += rcount[r];
+  }
+  if (rtot > INT32_MAX) throw Error("exchange_records: receive volume exceeds 2^31 records");
+  std::vector<T> sbuf;
+  sbuf.reserve(static_cast<std::size_t>(stot));
+  for (int r = 0; r < size; ++r) sbuf.insert(sbuf.end(), out[r].begin(), out[r].end());
+  std::vector<T> rbuf(static_cast<std::size_t>(rtot));
+  MPI_Alltoallv(sbuf.data(), scount.data(), sdisp.data(), rec, rbuf.data(), rcount.data(), rdisp.data(), rec, comm);
+  MPI_Type_free(&rec);
+  return rbuf;
+}
+
+}  // namespace snl

@@ -1,0 +1,92 @@
+#pragma once
+// The localization problem on one rank: its part of the sensor graph (a
+// DistGraph whose edge data are the ranges d_ij), the anchor measurements of
+// its owned sensors, truth rows, and maps between file (block) order and the
+// solver's local order.
+#include <mpi.h>
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "snl/graph/dist_graph.hpp"
+#include "snl/io/network.hpp"
+
+namespace snl {
+
+struct ProblemReport {
+  MergeStats merged;                ///< duplicate rows merged (global)
+  PartitionStats partition;
+  GlobalId num_sensor_edges = 0;    ///< after merging (global)
+  GlobalId num_anchor_edges = 0;
+  GlobalId unanchored = 0;          ///< sensors in components with no anchor measurement
+  GlobalId few_measurements = 0;    ///< sensors with fewer than p+1 measurements
+  GlobalId unlocalizable = 0;       ///< sensors flagged by either test or by the file's report
+  std::vector<GlobalId> unlocalizable_sample;  ///< the first (up to 20) such ids
+  /// Setup time by phase (rank 0's clock, after a barrier-free pass): merge,
+  /// connectivity, partition, graph (with the graph's own phases), anchors.
+  std::vector<std::pair<std::string, double>> setup_phases;
+};
+
+class LocalizationProblem {
+ public:
+  /// Collective. `slab` is this rank's slab of a validated network file
+  /// (read_network). Duplicate measurements are merged, the sensor graph is
+  /// partitioned and distributed, and anchors/truth move to the owners.
+  LocalizationProblem(MPI_Comm comm, const Network& slab, PartitionMethod method, ProblemReport* report);
+
+  MPI_Comm comm() const { return graph_.comm(); }
+  int dim() const { return dim_; }
+  GlobalId num_sensors() const { return graph_.num_global(); }
+  GlobalId num_anchors() const { return static_cast<GlobalId>(anchors_.size()) / dim_; }
+  DistGraph& graph() { return graph_; }
+  const DistGraph& graph() const { return graph_; }
+  LocalId num_owned() const { return graph_.num_owned(); }
+  LocalId num_local() const { return graph_.num_local(); }
+
+  const std::vector<double>& anchors() const { return anchors_; }
+  /// Anchor measurements of owned node v: [anchor_offsets()[v], [v+1]), sorted by anchor id.
+  const std::vector<std::int64_t>& anchor_offsets() const { return anchor_offsets_; }
+  const std::vector<std::int32_t>& anchor_ids() const { return anchor_ids_; }
+  const std::vector<double>& anchor_ranges() const { return anchor_ranges_; }
+
+  bool has_truth() const { return has_truth_; }
+  const std::vector<double>& truth() const { return truth_; }      ///< owned rows
+  const std::vector<std::uint8_t>& flags() const { return flags_; }  ///< owned rows, LocalizabilityFlag bits
+  std::optional<double> sigma() const { return sigma_; }
+
+  int max_degree() const { return delta_max_; }            ///< delta_max (global)
+  int max_anchor_degree() const { return max_anchor_deg_; }  ///< max_i |A_i| (global)
+
+  /// Bytes held by this rank's problem arrays (capacities; graph included).
+  std::int64_t memory_bytes() const;
+
+  /// Monte Carlo over noise: replaces every range by |true distance +
+  /// sigma N(0,1)| (003 eq. 28), the noise keyed by (seed, pair) so that both
+  /// ends of an edge and any number of ranks draw the same value. Needs truth.
+  void resample_ranges(double sigma, std::uint64_t seed);
+
+  /// Rows in file order [row_offset, row_offset + rows) on this rank (any
+  /// contiguous slabs that tile [0, n)) -> owned rows in local order.
+  std::vector<double> file_rows_to_owned(const std::vector<double>& rows, GlobalId row_offset, int width) const;
+  /// Owned rows (local order) -> this rank's block of rows in file order
+  /// (block_range); row_offset receives the first row.
+  std::vector<double> owned_to_file_rows(const double* owned, int width, GlobalId* row_offset) const;
+
+ private:
+  void build(MPI_Comm comm, const Network& slab, PartitionMethod method, ProblemReport* report);
+  int dim_ = 2;
+  DistGraph graph_;
+  std::vector<double> anchors_;
+  std::vector<std::int64_t> anchor_offsets_;
+  std::vector<std::int32_t> anchor_ids_;
+  std::vector<double> anchor_ranges_;
+  bool has_truth_ = false;
+  std::vector<double> truth_;
+  std::vector<std::uint8_t> flags_;
+  std::optional<double> sigma_;
+  int delta_max_ = 0, max_anchor_deg_ = 0;
+};
+
+}  // namespace snl

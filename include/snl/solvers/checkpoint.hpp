@@ -1,0 +1,68 @@
+#pragma once
+// Algorithm state in global order, so a checkpoint written on P ranks resumes
+// on any number of ranks. Node rows are stored in sensor order; per-edge data
+// as (i, j, values) records with i < j, each edge once; per-anchor-edge data as
+// (i, k, values) records. Layout in docs/formats.md.
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "snl/io/h5file.hpp"
+#include "snl/problem/problem.hpp"
+
+namespace snl {
+
+class StateWriter {
+ public:
+  StateWriter(H5File& file, const LocalizationProblem& prob, std::string prefix = "state/")
+      : f_(file), prob_(prob), prefix_(std::move(prefix)) {}
+  void scalar(const std::string& name, double v);
+  /// Owned rows (local order), `width` doubles each.
+  void node_rows(const std::string& name, const double* owned, int width);
+  /// One row per adjacency entry (graph CSR order); the copy held by the
+  /// smaller-id end is stored (both ends hold identical values).
+  void edge_rows(const std::string& name, const double* per_entry, int width);
+  /// The same, with value c of CSR entry e of owned node v given by get(v, e,
+  /// c) (for state kept in another layout: no copy of it is made).
+  void edge_rows(const std::string& name, int width,
+                 const std::function<double(LocalId, std::int64_t, int)>& get);
+  /// One row per anchor measurement of owned nodes (anchor CSR order).
+  void anchor_rows(const std::string& name, const double* per_entry, int width);
+
+ private:
+  H5File& f_;
+  const LocalizationProblem& prob_;
+  std::string prefix_;
+};
+
+class StateReader {
+ public:
+  StateReader(const H5File& file, const LocalizationProblem& prob, std::string prefix = "state/")
+      : f_(file), prob_(prob), prefix_(std::move(prefix)) {}
+  double scalar(const std::string& name) const;
+  void node_rows(const std::string& name, double* owned, int width) const;
+  void edge_rows(const std::string& name, double* per_entry, int width) const;
+  /// The same, handing value c of CSR entry e of owned node v to set(v, e, c, value).
+  void edge_rows(const std::string& name, int width,
+                 const std::function<void(LocalId, std::int64_t, int, double)>& set) const;
+  void anchor_rows(const std::string& name, double* per_entry, int width) const;
+
+ private:
+  const H5File& f_;
+  const LocalizationProblem& prob_;
+  std::string prefix_;
+};
+
+/// Order-independent 64-bit fingerprint of a network slab's content
+/// (collective: identical for any number of ranks), as 16 hex digits.
+std::string network_fingerprint(const Network& slab, MPI_Comm comm);
+
+/// Signals that ask a run to checkpoint and stop (SIGTERM, SIGUSR1).
+void install_stop_signal_handlers();
+/// True once such a signal arrived on this process.
+bool stop_signal_received();
+/// Exit status of a run stopped by a signal after writing its checkpoint.
+constexpr int kExitCheckpointed = 3;
+
+}  // namespace snl

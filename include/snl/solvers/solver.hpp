@@ -1,0 +1,211 @@
+#pragma once
+// Solver interface in the style of Ceres: an Options struct with in-class
+// defaults and validation, a Summary, iteration callbacks, and a small
+// Algorithm interface that every method (relaxation, MM, BB, ...) implements,
+// so the driver never changes when an algorithm is added.
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "snl/solvers/checkpoint.hpp"
+#include "snl/problem/metrics.hpp"
+#include "snl/problem/problem.hpp"
+
+namespace snl {
+
+enum class TerminationType {
+  kConvergence,    ///< a tolerance was met
+  kNoConvergence,  ///< max_iter reached
+  kUserAbort,      ///< a callback asked to stop
+  kSignal,         ///< SIGTERM/SIGUSR1 asked to stop (a checkpoint was written)
+  kFailure,        ///< numerical failure (non-finite iterate)
+};
+const char* to_string(TerminationType t);
+
+struct SolverOptions {
+  /// relaxation | mm | pipeline | bb | pm | async | async-exact
+  std::string algorithm = "pipeline";
+  /// Iterations per phase (the pipeline has two phases).
+  std::int64_t max_iter = 10000;
+  /// Relative improvement ||x(k) - x(k-1)|| / ||x(k)|| at or below which a
+  /// phase stops (003, Sec. V uses 1e-6). 0 disables it.
+  double tol = 1e-6;
+  /// Stop when the norm of the gradient the method computes falls to this
+  /// (the relaxation's grad f_hat at the extrapolated point). 0 disables it.
+  double grad_tol = 0.0;
+  /// Record history (and report progress) every this many iterations; 0: auto
+  /// (every iteration up to 2000, else about 1000 records per phase; at least
+  /// every 10 iterations above 100,000 sensors).
+  std::int64_t history_every = 0;
+  /// Consensus rounds per BB iteration (Calafiore et al. use 20).
+  int bb_rounds = 20;
+  /// Temporal blocking: up to this many relaxation or MM iterations per pass over memory
+  /// (the same iterates, bit for bit, with far less memory traffic). The
+  /// stopping tests, history records, callbacks, signals and checkpoints are
+  /// then taken at the end of a pass: a pass ends at every multiple of
+  /// history_every and of the checkpoint interval and at max_iter, but a
+  /// tolerance met inside a pass stops the phase at its end. 1: off.
+  int temporal_block = 1;
+  /// Check after every iteration that the MM surrogate did not increase
+  /// (one extra reduction per iteration). On by default in debug builds.
+#ifdef NDEBUG
+  bool check_monotone = false;
+#else
+  bool check_monotone = true;
+#endif
+  std::uint64_t seed = 1;
+  /// "" if valid, else the message.
+  std::string validate() const;
+};
+
+/// What an iteration callback (and the history) sees.
+struct IterationSummary {
+  std::string phase;             ///< algorithm of the current phase
+  std::int64_t iteration = 0;    ///< within the phase
+  std::int64_t total_iteration = 0;
+  double cost = NAN;             ///< the cost the phase's algorithm minimizes
+  double ml_cost = NAN;          ///< f(x), comparable across algorithms
+  double rel_change = NAN;       ///< ||x(k)-x(k-1)|| / ||x(k)||
+  double grad_norm = NAN;
+  double rmse = NAN, mpe = NAN;  ///< when truth is known
+  double messages = 0;           ///< cumulative messages per sensor (all phases)
+  double reals = 0;              ///< cumulative reals per sensor (all phases)
+  double elapsed = 0;            ///< seconds since solve() began
+};
+
+enum class CallbackReturn { kContinue, kAbort };
+
+class IterationCallback {
+ public:
+  virtual ~IterationCallback() = default;
+  /// Called collectively on every rank at recorded iterations.
+  virtual CallbackReturn operator()(const IterationSummary& s) = 0;
+};
+
+struct Summary {
+  std::string algorithm;
+  TerminationType termination = TerminationType::kNoConvergence;
+  std::string message;
+  std::int64_t iterations = 0;  ///< all phases
+  bool converged = false;
+  double initial_cost = NAN, final_cost = NAN;  ///< of the last phase's own objective
+  CostTerms costs;                              ///< at the final point
+  /// Eq. (22) bound on f* - f_hat*, valid only at the relaxation's minimizer:
+  /// evaluated where a relaxation phase ended (NaN if the run had none).
+  double gap_certificate = NAN;
+  double relaxed_optimum = NAN;  ///< f_hat where the relaxation phase ended
+  ErrorMetrics errors;
+  double messages_per_sensor = 0, reals_per_sensor = 0;
+  std::int64_t mpi_bytes = 0;        ///< halo bytes sent, all ranks (algorithm exchanges)
+  double comm_wait_fraction = 0;     ///< time waiting in halo end() / wall (max over ranks)
+  double wall_seconds = 0;
+  /// Time inside Algorithm::iterate() only (no history metrics, reductions or
+  /// checkpoints), max over ranks; and the halo wait within it, max over ranks.
+  double iterate_seconds = 0, iterate_wait_seconds = 0;
+  /// Per phase (pipeline: relaxation then mm), same meaning as iterate_seconds.
+  std::vector<std::pair<std::string, double>> phase_iterate_seconds;
+  /// Algorithm state (iterates, edge variables), all ranks; max over phases.
+  std::int64_t algorithm_state_bytes = 0;
+  /// Per phase: modelled memory traffic of one iteration, all ranks (bytes).
+  std::vector<std::pair<std::string, double>> phase_traffic_bytes;
+  double lipschitz = NAN;
+  int ranks = 1;
+  std::vector<IterationSummary> history;
+  std::string brief_report() const;
+};
+
+/// One iterative method on a LocalizationProblem. Positions are local arrays
+/// [num_local * p]: owned rows first, ghost rows after.
+class Algorithm {
+ public:
+  virtual ~Algorithm() = default;
+  virtual std::string name() const = 0;
+  /// Collective. Starts from x (owned rows valid; ghosts are exchanged here).
+  virtual void start(const std::vector<double>& x) = 0;
+  /// Collective. One iteration of the paper's update.
+  virtual void iterate() = 0;
+  /// Iterations one iterate_levels() call may run (temporal blocking); 1 if none.
+  virtual int max_levels() const { return 1; }
+  /// Collective. n <= max_levels() iterations, the same iterates as n calls of
+  /// iterate(); change_norms() and grad_norm_sq() then refer to the last.
+  virtual void iterate_levels(int n) {
+    for (int j = 0; j < n; ++j) iterate();
+  }
+  /// Current iterate; owned rows valid.
+  virtual const std::vector<double>& positions() const = 0;
+  /// Collective: the objective the method minimizes at the current iterate.
+  virtual double objective() = 0;
+  /// This rank's sums over owned rows of ||x(k)-x(k-1)||^2 and ||x(k)||^2.
+  virtual void change_norms(double* diff_sq, double* x_sq) const = 0;
+  /// This rank's squared norm of the last gradient computed (NaN if none).
+  virtual double grad_norm_sq() const { return std::numeric_limits<double>::quiet_NaN(); }
+  /// Per sensor per iteration (spec: one broadcast of a p-vector = 1 message, p reals).
+  virtual double messages_per_iteration() const { return 1.0; }
+  virtual double reals_per_iteration() const = 0;
+  /// Constant used by the method (NaN if none).
+  virtual double lipschitz() const { return std::numeric_limits<double>::quiet_NaN(); }
+  /// Bytes of this rank's state arrays (capacities), for the memory report.
+  virtual std::int64_t memory_bytes() const { return 0; }
+  /// Bytes this rank must move to or from memory in one iteration: every
+  /// array streamed once, gathered neighbour rows once (the model of
+  /// docs/performance.md, for the bandwidth bound); NaN if not modelled.
+  virtual double traffic_bytes_per_iteration() const { return std::numeric_limits<double>::quiet_NaN(); }
+  /// Collective. Everything needed to continue bit for bit (after start()).
+  virtual void save(StateWriter& w) const = 0;
+  virtual void load(const StateReader& r) = 0;
+};
+
+/// PM and the asynchronous methods (src/alg_sequential.cpp); nullptr for other names.
+std::unique_ptr<Algorithm> make_sequential_algorithm(const std::string& name, LocalizationProblem& prob,
+                                                     const SolverOptions& opt);
+/// Deterministic Jones-Plassmann colouring (priorities hashed from global ids):
+/// a colour per local node (owned and ghost); neighbours never share one.
+std::vector<int> jones_plassmann_coloring(DistGraph& g);
+
+/// Numeric codes of the algorithms in history/checkpoint/experiment files:
+/// 0=relaxation 1=mm 2=bb 3=pm 4=async 5=async-exact (9 for anything else).
+int algorithm_code(const std::string& name);
+const char* algorithm_name(int code);  ///< inverse of algorithm_code ("?" if unknown)
+constexpr const char* kAlgorithmCodes = "0=relaxation 1=mm 2=bb 3=pm 4=async 5=async-exact";
+
+/// Factory: relaxation, mm, bb, pm, async, async-exact. Throws snl::Error for an unknown name.
+std::unique_ptr<Algorithm> make_algorithm(const std::string& name, LocalizationProblem& prob,
+                                          const SolverOptions& opt);
+
+/// Initial point: --init random (uniform in the bounding box of the anchors,
+/// keyed by (seed, global id): the same for any number of ranks). Owned rows.
+std::vector<double> random_initial_positions(const LocalizationProblem& prob, std::uint64_t seed);
+
+/// Checkpointing of a Solver run (layout in docs/formats.md).
+struct CheckpointConfig {
+  std::string path;                 ///< write checkpoints here ("" = never)
+  std::int64_t every = 0;           ///< every K iterations (0 = off)
+  double seconds = 0;               ///< and/or every S seconds of wall clock (0 = off)
+  std::string restart;              ///< resume from this checkpoint ("" = fresh start)
+  std::string network_fingerprint;  ///< network_fingerprint() of the input
+  bool stop_on_signal = false;      ///< SIGTERM/SIGUSR1: checkpoint and stop (kSignal)
+};
+
+/// Runs the configured algorithm (or pipeline) from x0 (owned rows, local
+/// order). Collective. The final owned positions are left in `x_out`.
+class Solver {
+ public:
+  Solver(LocalizationProblem& prob, SolverOptions opt);
+  void add_callback(IterationCallback* cb) { callbacks_.push_back(cb); }
+  void set_checkpointing(const CheckpointConfig& c) { ckpt_ = c; }
+  /// Fingerprint of the options that a checkpoint must match to be resumed.
+  std::string options_fingerprint() const;
+  Summary solve(const std::vector<double>& x0, std::vector<double>* x_out);
+
+ private:
+  LocalizationProblem& prob_;
+  SolverOptions opt_;
+  std::vector<IterationCallback*> callbacks_;
+  CheckpointConfig ckpt_;
+};
+
+}  // namespace snl

@@ -1,0 +1,212 @@
+#pragma once
+// Node kernels of the synchronous methods (internal header).
+//
+// A node's update sums one term per incident edge in global-id order (so
+// results do not depend on the number of ranks). The owned nodes are taken C
+// at a time, one per SIMD lane (C = 8 with AVX-512, 4 with AVX2; NodeLanes),
+// and each lane adds its own node's terms in that order: IEEE
+// add/sub/mul/div/sqrt and no FMA, so every lane equals the scalar twin bit
+// for bit. The SIMD kernels serve p = 2 and p = 3; the scalar twins are the
+// portable path and what the tests compare the SIMD paths against.
+// docs/performance.md has the measurements behind this layout.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "snl/graph/halo.hpp"
+#include "snl/problem/problem.hpp"
+
+namespace snl::detail {
+
+/// v <- P_sphere(rho)(v) = rho v / |v|, and rho e_1 for v = 0 (spec convention).
+template <int P>
+inline void project_sphere(double rho, double* v) {
+  double s = 0;
+  for (int c = 0; c < P; ++c) s += v[c] * v[c];
+  const double nv = std::sqrt(s);
+  if (nv > 0) {
+    const double f = rho / nv;
+    for (int c = 0; c < P; ++c) v[c] *= f;
+  } else {
+    v[0] = rho;
+    for (int c = 1; c < P; ++c) v[c] = 0;
+  }
+}
+
+/// True when the SIMD kernels are used: the CPU has AVX2 (or AVX-512) and the
+/// environment does not say SNL_SIMD=0 (read once).
+bool simd_enabled();
+/// Forces the path (tests compare the two); returns the previous setting.
+bool set_simd_enabled(bool on);
+
+/// Anchor terms e(x_v - a_k, r_vk) of owned node v added to acc in anchor-id
+/// order (scalar: a node has few).
+void add_anchor_disk_terms(const LocalizationProblem& prob, LocalId v, const double* xv, double* acc);
+
+/// SIMD lanes of the node-lane kernels: 8 where the CPU has AVX-512F/DQ, else
+/// 4. Fixed at start-up from the CPU and SNL_SIMD (0, avx2, avx512), not by
+/// set_simd_enabled: the layout, and with it every rounding of the lane sums,
+/// is then the same on the SIMD and on the scalar path.
+int node_lanes();
+/// The largest value node_lanes() returns (size of per-lane scratch).
+inline constexpr int kMaxLanes = 8;
+/// The instruction set the kernels use now: "avx512", "avx2" or "scalar".
+const char* simd_name();
+
+/// Owned nodes in chunks of C = lanes consecutive nodes with their slots
+/// interleaved (ELL per chunk, i.e. SELL-C-1 of Kreutzer et al. 2014): group
+/// g of a chunk holds the g-th neighbour of each of its C nodes, so that the
+/// C nodes' sums run side by side, one node per SIMD lane, each still adding
+/// its own terms in its own slot (global-id) order: the same bits as a loop
+/// over the node's slots. A chunk is padded to its largest degree with the
+/// node itself at range 1 (z = 0 is inside the disk: the term is +0.0, which
+/// changes no sum). The interior [0, num_interior) and the boundary nodes are
+/// chunked separately (the halo overlap needs the split); only the last chunk
+/// of each part can be partial.
+struct NodeLanes {
+  int lanes = 4;
+  std::int64_t split = 0;                 ///< chunks [0, split) interior, [split, size) boundary
+  std::vector<LocalId> first;             ///< chunk c: nodes [first[c], first[c] + count[c])
+  std::vector<std::uint8_t> count;
+  std::vector<std::uint8_t> has_anchor;   ///< some node of the chunk has anchor ranges
+  std::vector<std::int64_t> group_off;    ///< chunk c: groups [group_off[c], group_off[c + 1])
+  std::vector<LocalId> adj;               ///< lanes per group; entry q: neighbour of node first[c] + q
+  std::vector<double> rho;                ///< lanes per group, in register lane order (lane_node)
+  /// Per group, bit L for register lane L: the slot is real (not padding);
+  /// the slot's edge is (owner, neighbour) in global-id order (MM's orientation).
+  std::vector<std::uint8_t> real, fwd;
+  LocalId n_interior = 0;
+  /// Node offset held by register lane L after the pairwise unpack of row
+  /// loads: (0, C/2, 1, C/2 + 1, ...); lane_of_node is its inverse.
+  static int lane_node(int L, int C) { return (L & 1) ? C / 2 + L / 2 : L / 2; }
+  static int lane_of_node(int q, int C) { return q < C / 2 ? 2 * q : 2 * (q - C / 2) + 1; }
+  std::int64_t size() const { return static_cast<std::int64_t>(first.size()); }
+  std::int64_t groups() const { return group_off.empty() ? 0 : group_off.back(); }
+  /// Index of coordinate c of slot k of owned node v in a per-slot array of
+  /// P-rows in lane layout: [(group P + c) lanes + register lane].
+  std::size_t at(LocalId v, std::int64_t k, int P, int c) const {
+    const std::int64_t ch = v < n_interior ? v / lanes : split + (v - n_interior) / lanes;
+    const int L = lane_of_node(static_cast<int>(v - first[ch]), lanes);
+    return std::size_t((group_off[ch] + k) * P + c) * lanes + L;
+  }
+  std::int64_t bytes() const;
+  void build(const LocalizationProblem& prob);
+};
+
+/// Temporal blocking of a Jacobi step over the chunks of a NodeLanes layout
+/// (plan once, run every pass): up to `levels` iterations per pass over
+/// memory, so that the edge arrays a chunk streams are reused from cache by
+/// the following levels. Level j (iteration j of the pass) reads the rows of
+/// buffer j % 2 and writes buffer (j + 1) % 2; each node does exactly the
+/// arithmetic of a plain iteration, so the iterates are the same bits.
+///
+/// Schedule (run_levels): a wavefront over the interior chunks, level j
+/// trailing level j - 1 by `skew` chunks, the largest chunk distance of any
+/// edge between two chunks that are not next to the boundary. A chunk within
+/// chunk-graph distance j of a boundary chunk (depth <= j) is not safe at
+/// level j in the wavefront (its neighbours' level j - 1 may wait for the
+/// halo); it runs after the wavefront, level by level, each level's halo
+/// exchange overlapping its interior part. Writing x(j+1) over x(j-1) is safe
+/// by the same conditions: every reader of x(j-1)[c] is a neighbour's level
+/// j - 1, already done.
+struct LevelPlan {
+  std::int64_t skew = 0;             ///< chunks between consecutive levels of the wavefront
+  std::int64_t block = 16;           ///< chunks per level and wavefront stage (tests vary it)
+  std::vector<std::uint8_t> depth;   ///< per chunk: distance to a boundary chunk, capped at max(levels, 2)
+  /// Per level j: runs [b, e) of interior chunks with depth <= j, ascending.
+  std::vector<std::vector<std::pair<std::int64_t, std::int64_t>>> deferred;
+  void build(const LocalizationProblem& prob, const NodeLanes& nl, int levels);
+  std::int64_t bytes() const;
+};
+
+/// One pass of n iterations (n <= the levels the plan was built for, the size
+/// of `deferred`): step(j, c0, c1) runs level j on chunks [c0, c1).
+/// buf[j % 2] is the row array level j reads; its ghost rows are exchanged
+/// here (level 0's over the whole wavefront). With n = 1 this is the plain
+/// iteration: halo begin -> interior chunks -> halo end -> boundary.
+template <class Step>
+void run_levels(const LevelPlan& lp, const NodeLanes& nl, int n, HaloPlan& halo, double* const buf[2], int p,
+                Step&& step) {
+  const std::int64_t split = nl.split;
+  // Chunks per level and stage: the window the levels share is (n - 1) skew
+  // + block chunks.
+  const std::int64_t block = n == 1 ? std::max<std::int64_t>(split, 1) : lp.block;
+  halo.begin(buf[0], p);
+  for (std::int64_t t = 0; split > 0; ++t) {
+    for (int j = 0; j < n; ++j) {
+      const std::int64_t lo = std::max<std::int64_t>(0, t * block - j * lp.skew);
+      const std::int64_t hi = std::min(split, (t + 1) * block - j * lp.skew);
+      for (std::int64_t c = lo; c < hi;) {  // runs of chunks deeper than j
+        while (c < hi && lp.depth[c] <= j) ++c;
+        std::int64_t e = c;
+        while (e < hi && lp.depth[e] > j) ++e;
+        if (c < e) step(j, c, e);
+        c = e;
+      }
+    }
+    if ((t + 1) * block - (n - 1) * lp.skew >= split) break;
+  }
+  halo.end(buf[0], p);
+  step(0, split, nl.size());
+  for (int j = 1; j < n; ++j) {
+    halo.begin(buf[j & 1], p);
+    for (const auto& [b, e] : lp.deferred[j]) step(j, b, e);
+    halo.end(buf[j & 1], p);
+    step(j, split, nl.size());
+  }
+}
+
+/// Whether the steps should write their node rows with non-temporal stores:
+/// when `bytes` (the iterate arrays one step streams) exceed what a cache
+/// keeps from one iteration to the next (16 MiB). 10M on 2 ranks: relaxation
+/// 35-36 instead of 39-40 ms/iteration while the VM's bandwidth was low,
+/// equal when it was high; at 100k (in cache) 17% slower, hence the size test
+/// (docs/performance.md).
+inline bool stream_rows(std::size_t bytes) { return bytes > (std::size_t(16) << 20); }
+
+/// out[j] = sum over the lanes of norms[j C .. j C + C) in lane order, j < n:
+/// the steps' per-lane norm sums, combined the same way on every path.
+inline void sum_lanes(const double* norms, int C, int n, double* out) {
+  for (int j = 0; j < n; ++j) {
+    out[j] = 0;
+    for (int q = 0; q < C; ++q) out[j] += norms[j * C + q];
+  }
+}
+
+/// One relaxation step (003, Alg. 1 steps 7-8 and the extrapolation) on the
+/// chunks [c0, c1): per node v, g = sum of the disk residuals e(w_v - w_u,
+/// rho) over its slots, then over its anchors; x(k) = w - g/L into xn, w(k+1)
+/// = x(k) + beta (x(k) - x(k-1)) into wn. norms[0 .. 3C): per lane q (node
+/// offset in its chunk) the running sums ||x(k) - x(k-1)||^2, ||x(k)||^2, ||g||^2.
+struct RelaxStep {
+  const double* w;
+  const double* x;
+  double* xn;
+  double* wn;
+  double L, beta;
+  double* norms;
+  bool stream = false;  ///< non-temporal stores of xn and wn (stream_rows; p = 2 only)
+};
+void relax_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
+                  const RelaxStep& s);
+
+/// One MM step (000, Alg. 1, eqs. 11-13) on the chunks [c0, c1): per node
+/// v, with dz = x_i - x_j in each edge's orientation, the x-step sum of sgn
+/// (dz - y_e) over its slots, then over its anchors (with their w updates),
+/// x(t+1) = x - invL sum into xn; y_e <- P_sphere(rho)(keep y_e + invL dz)
+/// in place (lane layout, NodeLanes::at; P_sphere(0) = rho e_1). norms[0 ..
+/// 2C): per lane ||x(t+1) - x(t)||^2, ||x(t+1)||^2.
+struct MMStep {
+  const double* x;
+  double* xn;
+  double* y;
+  double* aw;
+  double keep, invL;
+  double* norms;
+  bool stream = false;  ///< non-temporal stores of xn (stream_rows; p = 2 only)
+};
+void mm_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
+               const MMStep& s);
+
+}  // namespace snl::detail

@@ -1,0 +1,196 @@
+#include "snl/problem/metrics.hpp"
+
+#include <mpi.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <cstring>
+
+namespace snl {
+
+namespace {
+
+template <int P>
+inline double norm(const double* z) {
+  double s = 0;
+  for (int c = 0; c < P; ++c) s += z[c] * z[c];
+  return std::sqrt(s);
+}
+
+// e(z, rho) accumulated into g: z - P_B(rho)(z) = max(0, 1 - rho/|z|) z.
+// Branch-free: whether |z| > rho is data dependent (about half the edges near
+// a solution), and the mispredictions dominated the kernel. Adding +0.0 where
+// the condition fails leaves g bit-identical to the branching form (g starts
+// at +0.0 and a sum of doubles is -0.0 only if both terms are), and a
+// non-finite z outside the disk still contributes nothing.
+template <int P>
+inline void add_disk_residual(const double* z, double rho, double* g) {
+  const double nz = norm<P>(z);
+  const std::uint64_t mask = nz > rho ? ~std::uint64_t(0) : 0;  // becomes a compare mask, not a branch
+  const double c = 1.0 - rho / nz;
+  for (int k = 0; k < P; ++k) {
+    double t = c * z[k];
+    std::uint64_t bits;
+    std::memcpy(&bits, &t, sizeof bits);
+    bits &= mask;
+    std::memcpy(&t, &bits, sizeof t);
+    g[k] += t;
+  }
+}
+
+template <int P>
+inline void add_ml_residual(const double* z, double rho, double* g) {
+  const double nz = norm<P>(z);
+  if (nz > 0) {
+    const double c = 1.0 - rho / nz;
+    for (int k = 0; k < P; ++k) g[k] += c * z[k];
+  }
+}
+
+template <int P, bool kRelaxed>
+void gradient_impl(const LocalizationProblem& prob, const double* x, double* g, LocalId begin, LocalId end) {
+  const auto& gr = prob.graph();
+  const auto& off = gr.offsets();
+  const auto& adj = gr.adjacency();
+  const auto& ev = gr.edge_values();
+  const auto& aoff = prob.anchor_offsets();
+  const auto& aid = prob.anchor_ids();
+  const auto& ar = prob.anchor_ranges();
+  const double* anc = prob.anchors().data();
+  for (LocalId v = begin; v < end; ++v) {
+    double acc[P] = {};
+    const double* xv = x + std::size_t(v) * P;
+    for (auto e = off[v]; e < off[v + 1]; ++e) {
+      const double* xu = x + std::size_t(adj[e]) * P;
+      double z[P];
+      for (int c = 0; c < P; ++c) z[c] = xv[c] - xu[c];
+      if (kRelaxed)
+        add_disk_residual<P>(z, ev[e], acc);
+      else
+        add_ml_residual<P>(z, ev[e], acc);
+    }
+    for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
+      const double* a = anc + std::size_t(aid[e]) * P;
+      double z[P];
+      for (int c = 0; c < P; ++c) z[c] = xv[c] - a[c];
+      if (kRelaxed)
+        add_disk_residual<P>(z, ar[e], acc);
+      else
+        add_ml_residual<P>(z, ar[e], acc);
+    }
+    for (int c = 0; c < P; ++c) g[std::size_t(v) * P + c] = acc[c];
+  }
+}
+
+template <int P>
+CostTerms costs_impl(const LocalizationProblem& prob, const double* x) {
+  const auto& gr = prob.graph();
+  const auto& off = gr.offsets();
+  const auto& adj = gr.adjacency();
+  const auto& ev = gr.edge_values();
+  const auto& aoff = prob.anchor_offsets();
+  const auto& aid = prob.anchor_ids();
+  const auto& ar = prob.anchor_ranges();
+  const double* anc = prob.anchors().data();
+  CostTerms t;
+  auto term = [&](const double* z, double rho) {
+    const double nz = norm<P>(z);
+    const double ml = 0.5 * (nz - rho) * (nz - rho);
+    t.ml += ml;
+    if (nz > rho)
+      t.relaxed += ml;  // d_B(rho)(z)^2 / 2 = (|z| - rho)^2 / 2 outside the ball
+    else
+      t.certificate += ml;  // relaxed term is zero: eq. (22) collects the nonconvex one
+    t.apriori += 0.5 * rho * rho;
+  };
+  for (LocalId v = 0; v < gr.num_owned(); ++v) {
+    const double* xv = x + std::size_t(v) * P;
+    const GlobalId gv = gr.global_id(v);
+    for (auto e = off[v]; e < off[v + 1]; ++e) {
+      if (gr.global_id(adj[e]) < gv) continue;  // counted by the smaller end
+      const double* xu = x + std::size_t(adj[e]) * P;
+      double z[P];
+      for (int c = 0; c < P; ++c) z[c] = xv[c] - xu[c];
+      term(z, ev[e]);
+    }
+    for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
+      const double* a = anc + std::size_t(aid[e]) * P;
+      double z[P];
+      for (int c = 0; c < P; ++c) z[c] = xv[c] - a[c];
+      term(z, ar[e]);
+    }
+  }
+  double loc[4] = {t.ml, t.relaxed, t.certificate, t.apriori}, glob[4];
+  MPI_Allreduce(loc, glob, 4, MPI_DOUBLE, MPI_SUM, prob.comm());
+  return {glob[0], glob[1], glob[2], glob[3]};
+}
+
+}  // namespace
+
+CostTerms evaluate_costs(const LocalizationProblem& prob, const double* x) {
+  return prob.dim() == 2 ? costs_impl<2>(prob, x) : costs_impl<3>(prob, x);
+}
+
+void relaxed_gradient(const LocalizationProblem& prob, const double* x, double* g, LocalId begin, LocalId end) {
+  if (prob.dim() == 2)
+    gradient_impl<2, true>(prob, x, g, begin, end);
+  else
+    gradient_impl<3, true>(prob, x, g, begin, end);
+}
+
+void ml_gradient(const LocalizationProblem& prob, const double* x, double* g, LocalId begin, LocalId end) {
+  if (prob.dim() == 2)
+    gradient_impl<2, false>(prob, x, g, begin, end);
+  else
+    gradient_impl<3, false>(prob, x, g, begin, end);
+}
+
+double relaxation_lipschitz(const LocalizationProblem& prob) {
+  return 2.0 * prob.max_degree() + prob.max_anchor_degree();
+}
+
+double owned_norm_sq(const LocalizationProblem& prob, const double* v) {
+  double s = 0;
+  const std::size_t m = std::size_t(prob.num_owned()) * prob.dim();
+  for (std::size_t t = 0; t < m; ++t) s += v[t] * v[t];
+  return s;
+}
+
+ErrorMetrics evaluate_errors(const LocalizationProblem& prob, const double* x) {
+  ErrorMetrics m;
+  int has = prob.has_truth() ? 1 : 0, all = 0;
+  MPI_Allreduce(&has, &all, 1, MPI_INT, MPI_MIN, prob.comm());
+  if (!all) return m;
+  const int p = prob.dim();
+  const auto& tr = prob.truth();
+  const auto& fl = prob.flags();
+  double loc[5] = {0, 0, 0, 0, 0};  // sq, abs, sq_loc, abs_loc, count_loc
+  for (LocalId v = 0; v < prob.num_owned(); ++v) {
+    double s = 0;
+    for (int c = 0; c < p; ++c) {
+      const double d = x[std::size_t(v) * p + c] - tr[std::size_t(v) * p + c];
+      s += d * d;
+    }
+    loc[0] += s;
+    loc[1] += std::sqrt(s);
+    if (!fl[v]) {
+      loc[2] += s;
+      loc[3] += std::sqrt(s);
+      loc[4] += 1;
+    }
+  }
+  double glob[5];
+  MPI_Allreduce(loc, glob, 5, MPI_DOUBLE, MPI_SUM, prob.comm());
+  const double n = static_cast<double>(prob.num_sensors());
+  m.valid = true;
+  m.rmse = std::sqrt(glob[0] / n);
+  m.mpe = glob[1] / n;
+  m.localizable = static_cast<GlobalId>(glob[4]);
+  if (glob[4] > 0) {
+    m.rmse_localizable = std::sqrt(glob[2] / glob[4]);
+    m.mpe_localizable = glob[3] / glob[4];
+  }
+  return m;
+}
+
+}  // namespace snl

@@ -1,0 +1,337 @@
+#include "snl/problem/problem.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "snl/core/mpi_util.hpp"
+#include "snl/core/random.hpp"
+
+namespace snl {
+
+namespace {
+
+struct SensorEdgeRec {
+  GlobalId i, j;
+  double r;
+};
+struct AnchorEdgeRec {
+  GlobalId i, k;
+  double r;
+};
+
+// Union-find with path halving, for the connectivity report on rank 0.
+struct DisjointSets {
+  std::vector<GlobalId> parent;
+  explicit DisjointSets(GlobalId n) : parent(static_cast<std::size_t>(n)) {
+    std::iota(parent.begin(), parent.end(), GlobalId(0));
+  }
+  GlobalId find(GlobalId x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  void unite(GlobalId a, GlobalId b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+};
+
+// Which rank holds file row g, given every rank's first row (allgathered).
+int slab_holder(const std::vector<GlobalId>& starts, GlobalId g) {
+  return static_cast<int>(std::upper_bound(starts.begin(), starts.end(), g) - starts.begin()) - 1;
+}
+
+}  // namespace
+
+// The body runs collectives from start to end: a failure that only some ranks
+// see (std::bad_alloc, a bug) cannot be agreed on without a hang, so it aborts
+// every rank (abort_on_local_failure); snl::Error is agreed and propagates.
+LocalizationProblem::LocalizationProblem(MPI_Comm comm, const Network& slab, PartitionMethod method,
+                                         ProblemReport* report)
+    : dim_(slab.dim), anchors_(slab.anchors), has_truth_(slab.has_truth), sigma_(slab.sigma) {
+  abort_on_local_failure(comm, "problem setup", [&] { build(comm, slab, method, report); });
+}
+
+void LocalizationProblem::build(MPI_Comm comm, const Network& slab, PartitionMethod method, ProblemReport* report) {
+  test_fail_point("setup");  // fault-injection tests: one rank fails before the first collective
+  const int size = comm_size(comm);
+  const GlobalId n = slab.num_sensors;
+  const int p = dim_;
+  ProblemReport rep;
+  double tmark = MPI_Wtime();
+  auto phase_done = [&](const std::string& name) {
+    const double now = MPI_Wtime();
+    rep.setup_phases.emplace_back(name, now - tmark);
+    tmark = now;
+  };
+
+  // 1. Merge duplicates: route every measurement to the block owner of its
+  //    smaller sensor id, where all copies of a pair meet.
+  std::vector<GlobalId> sedges, aedges;
+  std::vector<double> sranges, aranges;
+  {
+    std::vector<std::vector<SensorEdgeRec>> out(size);
+    for (GlobalId e = 0; e < slab.local_sensor_edges(); ++e) {
+      GlobalId a = slab.sensor_edges[2 * e], b = slab.sensor_edges[2 * e + 1];
+      if (a > b) std::swap(a, b);
+      out[block_owner(n, size, a)].push_back({a, b, slab.sensor_ranges[e]});
+    }
+    auto got = exchange_records(comm, out);
+    test_fail_point("alloc");  // fault-injection tests: one rank runs out of memory between collectives
+    sedges.reserve(2 * got.size());
+    sranges.reserve(got.size());
+    for (const auto& r : got) {
+      sedges.push_back(r.i);
+      sedges.push_back(r.j);
+      sranges.push_back(r.r);
+    }
+    std::vector<std::vector<AnchorEdgeRec>> aout(size);
+    for (GlobalId e = 0; e < slab.local_anchor_edges(); ++e) {
+      const GlobalId i = slab.anchor_edges[2 * e];
+      aout[block_owner(n, size, i)].push_back({i, slab.anchor_edges[2 * e + 1], slab.anchor_ranges[e]});
+    }
+    auto agot = exchange_records(comm, aout);
+    aedges.reserve(2 * agot.size());
+    aranges.reserve(agot.size());
+    for (const auto& r : agot) {
+      aedges.push_back(r.i);
+      aedges.push_back(r.k);
+      aranges.push_back(r.r);
+    }
+    MergeStats local = merge_duplicates(sedges, sranges, aedges, aranges);
+    long long in[4] = {local.merged_sensor_pairs, local.merged_anchor_pairs,
+                       static_cast<long long>(sranges.size()), static_cast<long long>(aranges.size())},
+              sum[4];
+    MPI_Allreduce(in, sum, 4, MPI_LONG_LONG, MPI_SUM, comm);
+    rep.merged.merged_sensor_pairs = sum[0];
+    rep.merged.merged_anchor_pairs = sum[1];
+    rep.num_sensor_edges = sum[2];
+    rep.num_anchor_edges = sum[3];
+  }
+
+  phase_done("merge");
+  // 2. Connectivity and anchoring on rank 0 (union-find over all edges).
+  std::vector<std::uint8_t> unanchored_flag;  // [n] on every rank, filled below
+  {
+    std::vector<GlobalId> all = gather_to_root(comm, sedges);
+    std::vector<GlobalId> anchored_ids;
+    for (std::size_t e = 0; e < aedges.size(); e += 2) anchored_ids.push_back(aedges[e]);
+    std::vector<GlobalId> all_anchored = gather_to_root(comm, anchored_ids);
+    unanchored_flag.assign(static_cast<std::size_t>(n), 0);
+    if (comm_rank(comm) == 0) {
+      DisjointSets ds(n);
+      for (std::size_t e = 0; e < all.size(); e += 2) ds.unite(all[e], all[e + 1]);
+      std::vector<std::uint8_t> root_anchored(static_cast<std::size_t>(n), 0);
+      for (GlobalId i : all_anchored) root_anchored[ds.find(i)] = 1;
+      for (GlobalId i = 0; i < n; ++i) unanchored_flag[i] = root_anchored[ds.find(i)] ? 0 : 1;
+    }
+    bcast_bytes(comm, unanchored_flag.data(), unanchored_flag.size());
+  }
+
+  // 3. Partition and distribute the sensor graph; ranges ride along as edge data.
+  phase_done("connectivity");
+  std::vector<int> owner = partition_graph(comm, n, sedges, method, &rep.partition);
+  phase_done("partition");
+  for (const auto& ph : rep.partition.phases) rep.setup_phases.emplace_back("partition." + ph.first, ph.second);
+  graph_ = DistGraph(comm, n, owner, sedges, sranges, 1, std::max(p, 2));
+  phase_done("graph");
+  for (const auto& ph : graph_.build_phases()) rep.setup_phases.emplace_back("graph." + ph.first, ph.second);
+  sedges.clear();
+  sedges.shrink_to_fit();
+  sranges.clear();
+  sranges.shrink_to_fit();
+  {
+    long long g = graph_.num_ghosts(), gs = 0, gm = 0;
+    MPI_Allreduce(&g, &gs, 1, MPI_LONG_LONG, MPI_SUM, comm);
+    MPI_Allreduce(&g, &gm, 1, MPI_LONG_LONG, MPI_MAX, comm);
+    rep.partition.total_ghosts = gs;
+    rep.partition.max_ghosts = gm;
+  }
+
+  // 4. Anchor measurements to the owners of their sensors, sorted by anchor id.
+  const LocalId n_owned = graph_.num_owned();
+  {
+    std::vector<std::vector<AnchorEdgeRec>> out(size);
+    for (std::size_t e = 0; 2 * e < aedges.size(); ++e)
+      out[owner[aedges[2 * e]]].push_back({aedges[2 * e], aedges[2 * e + 1], aranges[e]});
+    auto got = exchange_records(comm, out);
+    std::vector<std::pair<LocalId, std::size_t>> keyed(got.size());
+    for (std::size_t t = 0; t < got.size(); ++t) keyed[t] = {graph_.owned_local(got[t].i), t};
+    std::sort(keyed.begin(), keyed.end(), [&](const auto& x, const auto& y) {
+      return x.first != y.first ? x.first < y.first : got[x.second].k < got[y.second].k;
+    });
+    anchor_offsets_.assign(static_cast<std::size_t>(n_owned) + 1, 0);
+    anchor_ids_.resize(got.size());
+    anchor_ranges_.resize(got.size());
+    for (std::size_t t = 0; t < keyed.size(); ++t) {
+      const auto& r = got[keyed[t].second];
+      ++anchor_offsets_[keyed[t].first + 1];
+      anchor_ids_[t] = static_cast<std::int32_t>(r.k);
+      anchor_ranges_[t] = r.r;
+    }
+    for (LocalId v = 0; v < n_owned; ++v) anchor_offsets_[v + 1] += anchor_offsets_[v];
+  }
+
+  // 5. Truth and the file's localizability flags to the owners.
+  if (has_truth_) truth_ = file_rows_to_owned(slab.truth, slab.sensor_row_offset, p);
+  flags_.assign(static_cast<std::size_t>(n_owned), 0);
+  {
+    int file_has_flags = slab.localizability.empty() ? 0 : 1, any = 0;
+    MPI_Allreduce(&file_has_flags, &any, 1, MPI_INT, MPI_MAX, comm);
+    if (any) {
+      std::vector<double> f(slab.localizability.begin(), slab.localizability.end());
+      auto owned_f = file_rows_to_owned(f, slab.sensor_row_offset, 1);
+      for (LocalId v = 0; v < n_owned; ++v) flags_[v] = static_cast<std::uint8_t>(owned_f[v]);
+    }
+  }
+  long long cnt[3] = {0, 0, 0};
+  int maxa = 0;
+  for (LocalId v = 0; v < n_owned; ++v) {
+    const auto na = anchor_offsets_[v + 1] - anchor_offsets_[v];
+    maxa = std::max(maxa, static_cast<int>(na));
+    if (unanchored_flag[graph_.global_id(v)]) {
+      flags_[v] |= kUnanchoredComponent;
+      ++cnt[0];
+    }
+    if (graph_.degree(v) + na < p + 1) {
+      flags_[v] |= kFewMeasurements;
+      ++cnt[1];
+    }
+    if (flags_[v]) ++cnt[2];
+  }
+  long long tot[3];
+  MPI_Allreduce(cnt, tot, 3, MPI_LONG_LONG, MPI_SUM, comm);
+  rep.unanchored = tot[0];
+  rep.few_measurements = tot[1];
+  rep.unlocalizable = tot[2];
+  {
+    std::vector<GlobalId> bad;
+    for (LocalId v = 0; v < n_owned && bad.size() < 20; ++v)
+      if (flags_[v]) bad.push_back(graph_.global_id(v));
+    std::sort(bad.begin(), bad.end());
+    auto all_bad = gather_to_root(comm, bad);
+    std::sort(all_bad.begin(), all_bad.end());
+    if (all_bad.size() > 20) all_bad.resize(20);
+    long long k = static_cast<long long>(all_bad.size());
+    MPI_Bcast(&k, 1, MPI_LONG_LONG, 0, comm);
+    all_bad.resize(static_cast<std::size_t>(k));
+    MPI_Bcast(all_bad.data(), static_cast<int>(k), MPI_INT64_T, 0, comm);
+    rep.unlocalizable_sample = all_bad;
+  }
+  delta_max_ = graph_.max_degree();
+  MPI_Allreduce(&maxa, &max_anchor_deg_, 1, MPI_INT, MPI_MAX, comm);
+  phase_done("anchors_flags");
+  if (report) *report = rep;
+}
+
+std::int64_t LocalizationProblem::memory_bytes() const {
+  return graph_.memory_bytes() +
+         static_cast<std::int64_t>(anchors_.capacity() * sizeof(double) +
+                                   anchor_offsets_.capacity() * sizeof(std::int64_t) +
+                                   anchor_ids_.capacity() * sizeof(std::int32_t) +
+                                   anchor_ranges_.capacity() * sizeof(double) + truth_.capacity() * sizeof(double) +
+                                   flags_.capacity());
+}
+
+std::vector<double> LocalizationProblem::file_rows_to_owned(const std::vector<double>& rows, GlobalId row_offset,
+                                                            int width) const {
+  MPI_Comm comm = this->comm();
+  const int size = comm_size(comm);
+  std::vector<GlobalId> starts(size);
+  GlobalId mine = row_offset;
+  MPI_Allgather(&mine, 1, MPI_INT64_T, starts.data(), 1, MPI_INT64_T, comm);
+  // Ask the holder of each owned row for it (in local order), then answer.
+  const LocalId n_owned = graph_.num_owned();
+  std::vector<std::vector<GlobalId>> ask(size);
+  std::vector<std::vector<LocalId>> ask_local(size);
+  for (LocalId v = 0; v < n_owned; ++v) {
+    const int h = slab_holder(starts, graph_.global_id(v));
+    ask[h].push_back(graph_.global_id(v));
+    ask_local[h].push_back(v);
+  }
+  std::vector<std::int64_t> cnt_out(size), cnt_in(size);
+  for (int r = 0; r < size; ++r) cnt_out[r] = static_cast<std::int64_t>(ask[r].size());
+  MPI_Alltoall(cnt_out.data(), 1, MPI_INT64_T, cnt_in.data(), 1, MPI_INT64_T, comm);
+  std::vector<GlobalId> asked = exchange_records(comm, ask);
+  std::vector<std::vector<double>> answer(size);
+  std::size_t pos = 0;
+  for (int r = 0; r < size; ++r) {
+    answer[r].reserve(static_cast<std::size_t>(cnt_in[r]) * width);
+    for (std::int64_t t = 0; t < cnt_in[r]; ++t, ++pos) {
+      const GlobalId local_row = asked[pos] - row_offset;
+      answer[r].insert(answer[r].end(), rows.begin() + local_row * width, rows.begin() + (local_row + 1) * width);
+    }
+  }
+  std::vector<double> got = exchange_records(comm, answer);
+  std::vector<double> owned(static_cast<std::size_t>(n_owned) * width);
+  pos = 0;
+  for (int r = 0; r < size; ++r)
+    for (LocalId v : ask_local[r]) {
+      std::copy(got.begin() + pos * width, got.begin() + (pos + 1) * width, owned.begin() + std::size_t(v) * width);
+      ++pos;
+    }
+  return owned;
+}
+
+std::vector<double> LocalizationProblem::owned_to_file_rows(const double* owned, int width,
+                                                            GlobalId* row_offset) const {
+  MPI_Comm comm = this->comm();
+  const int size = comm_size(comm), rank = comm_rank(comm);
+  const GlobalId n = num_sensors();
+  GlobalId b, e;
+  block_range(n, size, rank, b, e);
+  std::vector<std::vector<GlobalId>> ids(size);
+  std::vector<std::vector<double>> vals(size);
+  for (LocalId v = 0; v < graph_.num_owned(); ++v) {
+    const GlobalId g = graph_.global_id(v);
+    const int r = block_owner(n, size, g);
+    ids[r].push_back(g);
+    vals[r].insert(vals[r].end(), owned + std::size_t(v) * width, owned + std::size_t(v + 1) * width);
+  }
+  auto gid = exchange_records(comm, ids);
+  auto gv = exchange_records(comm, vals);
+  std::vector<double> rows(static_cast<std::size_t>(e - b) * width);
+  for (std::size_t t = 0; t < gid.size(); ++t)
+    std::copy(gv.begin() + t * width, gv.begin() + (t + 1) * width, rows.begin() + (gid[t] - b) * width);
+  if (row_offset) *row_offset = b;
+  return rows;
+}
+
+}  // namespace snl
+
+namespace snl {
+
+void LocalizationProblem::resample_ranges(double sigma, std::uint64_t seed) {
+  if (!has_truth_) throw Error("resampling ranges needs the true positions (dataset truth)");
+  const int p = dim_;
+  std::vector<double> t(std::size_t(graph_.num_local()) * p, 0.0);
+  std::copy(truth_.begin(), truth_.end(), t.begin());
+  graph_.halo().exchange(t.data(), p);
+  const GlobalId n = num_sensors();
+  auto dist = [&](const double* a, const double* b) {
+    double s = 0;
+    for (int c = 0; c < p; ++c) s += (a[c] - b[c]) * (a[c] - b[c]);
+    return std::sqrt(s);
+  };
+  auto& ev = graph_.mutable_edge_values();
+  const auto& off = graph_.offsets();
+  const auto& adj = graph_.adjacency();
+  for (LocalId v = 0; v < graph_.num_owned(); ++v) {
+    for (auto e = off[v]; e < off[v + 1]; ++e) {
+      const GlobalId a = graph_.global_id(v), b = graph_.global_id(adj[e]);
+      const auto key = static_cast<std::uint64_t>(std::min(a, b)) * static_cast<std::uint64_t>(n) +
+                       static_cast<std::uint64_t>(std::max(a, b));
+      const double d = dist(&t[std::size_t(v) * p], &t[std::size_t(adj[e]) * p]);
+      ev[e] = std::abs(d + sigma * standard_normal(seed, RngStream::kExperimentNoise, key));
+    }
+    for (auto e = anchor_offsets_[v]; e < anchor_offsets_[v + 1]; ++e) {
+      const auto key = (static_cast<std::uint64_t>(graph_.global_id(v)) << 20) ^
+                       static_cast<std::uint64_t>(anchor_ids_[e]) ^ 0x8000000000000000ULL;
+      const double d = dist(&t[std::size_t(v) * p], &anchors_[std::size_t(anchor_ids_[e]) * p]);
+      anchor_ranges_[e] = std::abs(d + sigma * standard_normal(seed, RngStream::kExperimentNoise, key));
+    }
+  }
+}
+
+}  // namespace snl

@@ -1,0 +1,303 @@
+#include "reference/reference.hpp"
+
+#include "snl/core/random.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace snl::reference {
+
+namespace {
+double dist(const double* a, const double* b, int p) {
+  double s = 0;
+  for (int c = 0; c < p; ++c) s += (a[c] - b[c]) * (a[c] - b[c]);
+  return std::sqrt(s);
+}
+void sphere(double rho, double* v, int p) {
+  double s = 0;
+  for (int c = 0; c < p; ++c) s += v[c] * v[c];
+  s = std::sqrt(s);
+  if (s > 0)
+    for (int c = 0; c < p; ++c) v[c] = rho * v[c] / s;
+  else {
+    v[0] = rho;
+    for (int c = 1; c < p; ++c) v[c] = 0;
+  }
+}
+std::vector<int> degrees(const Network& net) {
+  std::vector<int> d(net.num_sensors, 0);
+  for (std::size_t e = 0; e < net.sensor_ranges.size(); ++e) {
+    ++d[net.sensor_edges[2 * e]];
+    ++d[net.sensor_edges[2 * e + 1]];
+  }
+  return d;
+}
+int max_anchor_degree(const Network& net) {
+  std::vector<int> d(net.num_sensors, 0);
+  for (std::size_t e = 0; e < net.anchor_ranges.size(); ++e) ++d[net.anchor_edges[2 * e]];
+  return d.empty() ? 0 : *std::max_element(d.begin(), d.end());
+}
+}  // namespace
+
+double ml_cost(const Network& net, const std::vector<double>& x) {
+  const int p = net.dim;
+  double f = 0;
+  for (std::size_t e = 0; e < net.sensor_ranges.size(); ++e) {
+    const double r = dist(&x[net.sensor_edges[2 * e] * p], &x[net.sensor_edges[2 * e + 1] * p], p) - net.sensor_ranges[e];
+    f += 0.5 * r * r;
+  }
+  for (std::size_t e = 0; e < net.anchor_ranges.size(); ++e) {
+    const double r = dist(&x[net.anchor_edges[2 * e] * p], &net.anchors[net.anchor_edges[2 * e + 1] * p], p) -
+                     net.anchor_ranges[e];
+    f += 0.5 * r * r;
+  }
+  return f;
+}
+
+double relaxed_cost(const Network& net, const std::vector<double>& x) {
+  const int p = net.dim;
+  double f = 0;
+  for (std::size_t e = 0; e < net.sensor_ranges.size(); ++e) {
+    const double r = dist(&x[net.sensor_edges[2 * e] * p], &x[net.sensor_edges[2 * e + 1] * p], p) - net.sensor_ranges[e];
+    if (r > 0) f += 0.5 * r * r;
+  }
+  for (std::size_t e = 0; e < net.anchor_ranges.size(); ++e) {
+    const double r = dist(&x[net.anchor_edges[2 * e] * p], &net.anchors[net.anchor_edges[2 * e + 1] * p], p) -
+                     net.anchor_ranges[e];
+    if (r > 0) f += 0.5 * r * r;
+  }
+  return f;
+}
+
+std::vector<double> relaxed_gradient(const Network& net, const std::vector<double>& x) {
+  const int p = net.dim;
+  std::vector<double> g(x.size(), 0.0);
+  for (std::size_t e = 0; e < net.sensor_ranges.size(); ++e) {
+    const GlobalId i = net.sensor_edges[2 * e], j = net.sensor_edges[2 * e + 1];
+    const double d = dist(&x[i * p], &x[j * p], p);
+    if (d <= net.sensor_ranges[e]) continue;
+    const double c = 1 - net.sensor_ranges[e] / d;
+    for (int k = 0; k < p; ++k) {
+      g[i * p + k] += c * (x[i * p + k] - x[j * p + k]);
+      g[j * p + k] -= c * (x[i * p + k] - x[j * p + k]);
+    }
+  }
+  for (std::size_t e = 0; e < net.anchor_ranges.size(); ++e) {
+    const GlobalId i = net.anchor_edges[2 * e];
+    const double* a = &net.anchors[net.anchor_edges[2 * e + 1] * p];
+    const double d = dist(&x[i * p], a, p);
+    if (d <= net.anchor_ranges[e]) continue;
+    const double c = 1 - net.anchor_ranges[e] / d;
+    for (int k = 0; k < p; ++k) g[i * p + k] += c * (x[i * p + k] - a[k]);
+  }
+  return g;
+}
+
+double relaxation_lipschitz(const Network& net) {
+  const auto d = degrees(net);
+  const int dmax = d.empty() ? 0 : *std::max_element(d.begin(), d.end());
+  return 2.0 * dmax + max_anchor_degree(net);
+}
+
+std::vector<double> nesterov(const Network& net, const std::vector<double>& x0, int iters) {
+  const double L = relaxation_lipschitz(net);
+  std::vector<double> x = x0, xm = x0, w(x0.size());
+  for (int k = 1; k <= iters; ++k) {
+    for (std::size_t t = 0; t < x.size(); ++t) w[t] = x[t] + (double(k) - 2) / (double(k) + 1) * (x[t] - xm[t]);
+    const auto g = relaxed_gradient(net, w);
+    xm = x;
+    for (std::size_t t = 0; t < x.size(); ++t) x[t] = w[t] - g[t] / L;
+  }
+  return x;
+}
+
+std::vector<double> mm(const Network& net, const std::vector<double>& x0, int iters, std::vector<double>* surrogate) {
+  const int p = net.dim;
+  const auto d = degrees(net);
+  const double L = 2.0 * (d.empty() ? 0 : *std::max_element(d.begin(), d.end())) + max_anchor_degree(net) + 2.0;
+  const std::size_t E = net.sensor_ranges.size(), Ea = net.anchor_ranges.size();
+  // Orientation i -> j with i < j.
+  std::vector<GlobalId> ei(E), ej(E);
+  for (std::size_t e = 0; e < E; ++e) {
+    ei[e] = std::min(net.sensor_edges[2 * e], net.sensor_edges[2 * e + 1]);
+    ej[e] = std::max(net.sensor_edges[2 * e], net.sensor_edges[2 * e + 1]);
+  }
+  std::vector<double> x = x0, y(E * p), w(Ea * p);
+  for (std::size_t e = 0; e < E; ++e) {
+    for (int c = 0; c < p; ++c) y[e * p + c] = x[ei[e] * p + c] - x[ej[e] * p + c];
+    sphere(net.sensor_ranges[e], &y[e * p], p);
+  }
+  for (std::size_t e = 0; e < Ea; ++e) {
+    const double* a = &net.anchors[net.anchor_edges[2 * e + 1] * p];
+    for (int c = 0; c < p; ++c) w[e * p + c] = x[net.anchor_edges[2 * e] * p + c] - a[c];
+    sphere(net.anchor_ranges[e], &w[e * p], p);
+  }
+  auto F = [&]() {
+    double s = 0;
+    for (std::size_t e = 0; e < E; ++e)
+      for (int c = 0; c < p; ++c) {
+        const double r = x[ei[e] * p + c] - x[ej[e] * p + c] - y[e * p + c];
+        s += 0.5 * r * r;
+      }
+    for (std::size_t e = 0; e < Ea; ++e)
+      for (int c = 0; c < p; ++c) {
+        const double r = x[net.anchor_edges[2 * e] * p + c] - net.anchors[net.anchor_edges[2 * e + 1] * p + c] - w[e * p + c];
+        s += 0.5 * r * r;
+      }
+    return s;
+  };
+  if (surrogate) surrogate->assign(1, F());
+  for (int t = 0; t < iters; ++t) {
+    // Gradient of F with respect to x at z(t), then the projected steps (000, eqs. 11-13).
+    std::vector<double> gx(x.size(), 0.0), yn = y, wn = w;
+    for (std::size_t e = 0; e < E; ++e)
+      for (int c = 0; c < p; ++c) {
+        const double dz = x[ei[e] * p + c] - x[ej[e] * p + c];
+        const double r = dz - y[e * p + c];
+        gx[ei[e] * p + c] += r;
+        gx[ej[e] * p + c] -= r;
+        yn[e * p + c] = (L - 1) / L * y[e * p + c] + 1 / L * dz;
+      }
+    for (std::size_t e = 0; e < E; ++e) sphere(net.sensor_ranges[e], &yn[e * p], p);
+    for (std::size_t e = 0; e < Ea; ++e) {
+      const GlobalId i = net.anchor_edges[2 * e];
+      const double* a = &net.anchors[net.anchor_edges[2 * e + 1] * p];
+      for (int c = 0; c < p; ++c) {
+        const double dz = x[i * p + c] - a[c];
+        gx[i * p + c] += dz - w[e * p + c];
+        wn[e * p + c] = (L - 1) / L * w[e * p + c] + 1 / L * dz;
+      }
+      sphere(net.anchor_ranges[e], &wn[e * p], p);
+    }
+    for (std::size_t t2 = 0; t2 < x.size(); ++t2) x[t2] -= gx[t2] / L;
+    y.swap(yn);
+    w.swap(wn);
+    if (surrogate) surrogate->push_back(F());
+  }
+  return x;
+}
+
+namespace {
+struct Adj {
+  std::vector<std::vector<std::pair<GlobalId, double>>> nbr;  // (neighbour, range)
+  std::vector<std::vector<std::pair<GlobalId, double>>> anc;  // (anchor, range)
+};
+Adj adjacency(const Network& net) {
+  Adj a;
+  a.nbr.resize(net.num_sensors);
+  a.anc.resize(net.num_sensors);
+  for (std::size_t e = 0; e < net.sensor_ranges.size(); ++e) {
+    a.nbr[net.sensor_edges[2 * e]].push_back({net.sensor_edges[2 * e + 1], net.sensor_ranges[e]});
+    a.nbr[net.sensor_edges[2 * e + 1]].push_back({net.sensor_edges[2 * e], net.sensor_ranges[e]});
+  }
+  for (std::size_t e = 0; e < net.anchor_ranges.size(); ++e)
+    a.anc[net.anchor_edges[2 * e]].push_back({net.anchor_edges[2 * e + 1], net.anchor_ranges[e]});
+  for (auto& l : a.nbr) std::sort(l.begin(), l.end());
+  for (auto& l : a.anc) std::sort(l.begin(), l.end());
+  return a;
+}
+void project_ball(const double* z, const double* c, double rho, int p, double* acc) {
+  const double d = dist(z, c, p);
+  const double f = d > rho ? rho / d : 1.0;
+  for (int k = 0; k < p; ++k) acc[k] += c[k] + f * (z[k] - c[k]);
+}
+double local_f(const Network& net, const Adj& a, const std::vector<double>& x, GlobalId i, const double* v,
+               double* g) {
+  const int p = net.dim;
+  double f = 0;
+  for (int k = 0; k < p; ++k) g[k] = 0;
+  auto term = [&](const double* c, double rho) {
+    const double d = dist(v, c, p);
+    if (d <= rho) return;
+    f += 0.5 * (d - rho) * (d - rho);
+    for (int k = 0; k < p; ++k) g[k] += (1 - rho / d) * (v[k] - c[k]);
+  };
+  for (auto& [j, r] : a.nbr[i]) term(&x[j * p], r);
+  for (auto& [k, r] : a.anc[i]) term(&net.anchors[k * p], r);
+  return f;
+}
+}  // namespace
+
+std::vector<int> coloring(const Network& net) {
+  const Adj a = adjacency(net);
+  const GlobalId n = net.num_sensors;
+  std::vector<std::uint64_t> prio(n);
+  for (GlobalId v = 0; v < n; ++v) prio[v] = mix64(static_cast<std::uint64_t>(v) ^ 0x5bd1e995ULL);
+  // Sequentially in decreasing priority: the same colours as the parallel rounds.
+  std::vector<GlobalId> order(n);
+  for (GlobalId v = 0; v < n; ++v) order[v] = v;
+  std::sort(order.begin(), order.end(), [&](GlobalId x, GlobalId y) { return prio[x] != prio[y] ? prio[x] > prio[y] : x > y; });
+  std::vector<int> c(n, -1);
+  for (GlobalId v : order) {
+    std::vector<char> used(a.nbr[v].size() + 2, 0);
+    for (auto& [u, r] : a.nbr[v])
+      if (c[u] >= 0 && c[u] < static_cast<int>(used.size())) used[c[u]] = 1;
+    int k = 0;
+    while (used[k]) ++k;
+    c[v] = k;
+  }
+  return c;
+}
+
+std::vector<double> pm(const Network& net, const std::vector<double>& x0, int sweeps) {
+  const int p = net.dim;
+  const Adj a = adjacency(net);
+  const auto col = coloring(net);
+  std::vector<GlobalId> order(net.num_sensors);
+  for (GlobalId v = 0; v < net.num_sensors; ++v) order[v] = v;
+  std::stable_sort(order.begin(), order.end(), [&](GlobalId x, GlobalId y) { return col[x] < col[y]; });
+  std::vector<double> x = x0;
+  for (int s = 0; s < sweeps; ++s)
+    for (GlobalId i : order) {
+      const double deg = double(a.nbr[i].size() + a.anc[i].size());
+      if (deg == 0) continue;
+      double acc[3] = {0, 0, 0};
+      for (auto& [j, r] : a.nbr[i]) project_ball(&x[i * p], &x[j * p], r, p, acc);
+      for (auto& [k, r] : a.anc[i]) project_ball(&x[i * p], &net.anchors[k * p], r, p, acc);
+      for (int k = 0; k < p; ++k) x[i * p + k] = acc[k] / deg;
+    }
+  return x;
+}
+
+std::vector<double> async(const Network& net, const std::vector<double>& x0, long activations, std::uint64_t seed,
+                          bool exact, std::vector<double>* fhat) {
+  const int p = net.dim;
+  const Adj a = adjacency(net);
+  const double L = relaxation_lipschitz(net);
+  std::vector<double> x = x0;
+  if (fhat) fhat->assign(1, relaxed_cost(net, x));
+  for (long k = 0; k < activations; ++k) {
+    GlobalId i = static_cast<GlobalId>(uniform01(seed, RngStream::kAsyncClock, k) * double(net.num_sensors));
+    i = std::min<GlobalId>(i, net.num_sensors - 1);
+    double g[3];
+    if (!exact) {
+      local_f(net, a, x, i, &x[i * p], g);
+      for (int c = 0; c < p; ++c) x[i * p + c] -= g[c] / L;
+    } else {
+      const double Li = double(a.nbr[i].size() + a.anc[i].size());
+      if (Li > 0) {
+        double z[3], zm[3], w[3];
+        for (int c = 0; c < p; ++c) z[c] = zm[c] = x[i * p + c];
+        const double f0 = local_f(net, a, x, i, &x[i * p], g);
+        for (int l = 1; l <= 500; ++l) {
+          double step = 0, nz = 0;
+          for (int c = 0; c < p; ++c) w[c] = z[c] + (double(l) - 2) / (double(l) + 1) * (z[c] - zm[c]);
+          local_f(net, a, x, i, w, g);
+          for (int c = 0; c < p; ++c) {
+            zm[c] = z[c];
+            z[c] = w[c] - g[c] / Li;
+            step += (z[c] - zm[c]) * (z[c] - zm[c]);
+            nz += z[c] * z[c];
+          }
+          if (step <= 1e-24 * (1 + nz)) break;
+        }
+        if (local_f(net, a, x, i, z, g) <= f0)
+          for (int c = 0; c < p; ++c) x[i * p + c] = z[c];
+      }
+    }
+    if (fhat) fhat->push_back(relaxed_cost(net, x));
+  }
+  return x;
+}
+
+}  // namespace snl::reference
