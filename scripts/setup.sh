@@ -9,7 +9,7 @@ shift || true
 
 PKGS=(build-essential cmake ninja-build pkg-config openmpi-bin libopenmpi-dev libhdf5-openmpi-dev hdf5-tools
       libeigen3-dev libmetis-dev libgtest-dev libgmock-dev libcli11-dev libbenchmark-dev
-      python3-numpy python3-h5py python3-matplotlib)
+      python3-numpy python3-h5py python3-matplotlib clang libclang-rt-14-dev)
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
