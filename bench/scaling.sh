@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
-# End-to-end benchmark of issue #6: STREAM triad, then for each size generate
+# End-to-end benchmark: STREAM triad, then for each size generate
 # the network, and solve it with the relaxation and with MM (ITERS iterations,
 # --tol 0, history only at the end so that the iteration phase is pure) under
 # mpirun -np 1 and -np 2 (strong scaling), plus weak scaling at 1M sensors per
 # rank. Each solve is bracketed by two STREAM readings on its ranks (its
-# bound). Prints ONE table (docs/performance.md explains the columns).
+# bound). Prints ONE table (docs/performance.md explains the columns); keep
+# a run as docs/data/perf/results-<date>-<name>.txt with $WORK/records.jsonl
+# beside it, and add a row to docs/data/perf/README.md.
 #
 #   bench/scaling.sh                          # sizes 1M and 10M, 1000 iterations
 #   SIZES="1000000" ITERS=200 bench/scaling.sh

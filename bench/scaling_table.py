@@ -7,7 +7,7 @@ docs/performance.md and in each algorithm's traffic_bytes_per_iteration()):
 every array the iteration streams counted once, writes as one transfer (like
 STREAM), gathered neighbour rows once (RCM locality). With n sensors, g ghosts,
 D = 2E directed sensor edges, A anchor pairs and p = 2 this is
-  relaxation (fused pass, since 2026-11-22 b): 80 n + 16 g + 12 D + 12 A
+  relaxation (one fused pass):                 80 n + 16 g + 12 D + 12 A
   mm:                                          48 n + 16 g + 45 D + 44 A
 Older records (before the fused, SIMD kernels) lack the field; for them the
 model of that implementation is used:

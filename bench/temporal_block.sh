@@ -4,7 +4,8 @@
 # each rank count, every solve bracketed by STREAM triad readings on its own
 # ranks, then one table: ms per iteration of each phase, the 1 -> 2 rank
 # parallel efficiency T1 / (2 T2) for each S, and whether the positions equal
-# those of S = 1 on one rank bit for bit (h5diff).
+# those of S = 1 on one rank bit for bit (h5diff). Recorded runs:
+# docs/data/perf/results-*-tblock-*.txt (docs/data/perf/README.md).
 #
 #   NET=/tmp/snl-10m/net.h5 bench/temporal_block.sh
 # Environment: NET (required), BLOCKS ("1 2 3 4"), RANKS ("1 2"), IT (200), BIN (build/bin).

@@ -1,4 +1,4 @@
-// Peer comparison (issue #6): the ML localization problem solved centrally by
+// Peer comparison (docs/ceres.md): the ML localization problem solved centrally by
 // Ceres Solver with Levenberg-Marquardt and a sparse Cholesky linear solver.
 //
 //   f(x) = sum_{(i,j)} 1/2 (|x_i - x_j| - d_ij)^2 + sum_{(i,k)} 1/2 (|x_i - a_k| - r_ik)^2

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
-# Peer comparison (issue #6): snl MM on 2 ranks vs Ceres LM (central), both
+# Peer comparison (docs/ceres.md): snl MM on 2 ranks vs Ceres LM (central), both
 # started from the same relaxation output R0.h5.
 #   usage: bench/ceres/compare.sh [WORKDIR] [N ...]     (default N: 10000 100000 1000000)
-# Needs a build with -DSNL_BUILD_CERES=ON (BUILD, default ./build).
+# Needs a build with -DSNL_BUILD_CERES=ON (BUILD, default ./build). Recorded
+# runs: docs/data/perf/results-*-ceres.txt.
 # Stopping rules (override through the environment):
 #   relaxation: --tol 1e-6 --max-iter $RELAX_ITER (300)
 #   MM:         --tol 1e-6 --max-iter $MM_ITER (300)
