@@ -315,7 +315,7 @@ int run_solve(const SolveCommand& cmd, MPI_Comm comm) {
                     {"message", s.message},
                     {"network", cmd.network},
                     {"partition", rep.partition.method},
-                    {"history_phase_codes", kAlgorithmCodes}};
+                    {"history_phase_codes", algorithm_codes_legend()}};
   r.double_attrs = {{"ml_cost", s.costs.ml},
                     {"relaxed_cost", s.costs.relaxed},
                     {"gap_certificate", s.gap_certificate},

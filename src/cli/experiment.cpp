@@ -174,7 +174,7 @@ void run_experiment(const ExperimentCommand& cmd, MPI_Comm comm) {
     H5File f(cmd.h5, comm, H5File::Mode::kCreate);
     f.set_attr("format", std::string("snl-experiment"));
     f.set_attr("network", cmd.network);
-    f.set_attr("algorithms", std::string(kAlgorithmCodes));
+    f.set_attr("algorithms", algorithm_codes_legend());
     auto col = [&](const char* name, auto get) {
       std::vector<double> v;
       for (const auto& r : rows) v.push_back(get(r));
