@@ -257,7 +257,8 @@ void write_checkpoint(const std::string& path, const LocalizationProblem& prob, 
   f.set_attr("ranks", h.ranks);
   f.set_attr("num_sensors", h.num_sensors);
   f.set_attr("dim", h.dim);
-  for (const auto& c : kHistoryColumns) f.write_replicated(std::string("history/") + c.name, history_column(history, c));
+  for (const auto& c : kHistoryColumns)
+    f.write_replicated(std::string("history/") + c.name, history_column(history, c));
   StateWriter w(f, prob);
   alg.save(w);
   if (delay > 0) {

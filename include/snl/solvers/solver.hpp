@@ -2,7 +2,8 @@
 // Solver interface in the style of Ceres: an Options struct with in-class
 // defaults and validation, a Summary, iteration callbacks, and a small
 // Algorithm interface that every method (relaxation, MM, BB, ...) implements,
-// so the driver never changes when an algorithm is added.
+// so the driver never changes when an algorithm is added: a method is one .cpp
+// file in src/solvers/ plus one row of the registry (registry.hpp).
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -153,7 +154,7 @@ class Algorithm {
 /// The methods of the registry that are not synchronous (PM, async, async-exact); nullptr for other names.
 std::unique_ptr<Algorithm> make_sequential_algorithm(const std::string& name, LocalizationProblem& prob,
                                                      const SolverOptions& opt);
-/// Deterministic Jones-Plassmann colouring (priorities hashed from global ids):
+/// Deterministic Jones-Plassmann colouring (priorities hashed from global ids; PM's order, pm.cpp):
 /// a colour per local node (owned and ghost); neighbours never share one.
 std::vector<int> jones_plassmann_coloring(DistGraph& g);
 
