@@ -1,5 +1,6 @@
 // snl: sensor network localization. A thin command-line front end: parsing
-// here, everything else in libsnl (include/snl/commands.hpp).
+// here, everything else in libsnl (include/snl/cli/commands.hpp); the
+// algorithm names and capabilities come from the registry (snl/solvers/registry.hpp).
 #include <mpi.h>
 
 #include <CLI/CLI.hpp>
@@ -18,6 +19,177 @@ int fail(MPI_Comm comm, const std::string& msg, int status) {
   return status;
 }
 
+using Info = snl::AlgorithmInfo;
+
+// For the help of an option only some methods honour.
+std::string honoured_by(bool Info::*capability) { return "only " + snl::algorithms_with(capability); }
+
+// The subcommands' settings, filled by the parser.
+struct Commands {
+  snl::GenerateCommand gen;
+  std::string anchors = "corners", localizable = "auto";  // parsed into gen.options by parse_generate_choices
+  snl::InfoCommand info;
+  snl::SolveCommand solve;
+  snl::EvalCommand eval;
+  snl::ExperimentCommand experiment;
+  CLI::App *generate = nullptr, *info_cmd = nullptr, *solve_cmd = nullptr, *eval_cmd = nullptr,
+           *experiment_cmd = nullptr;
+};
+
+void add_generate(CLI::App& app, Commands& c) {
+  CLI::App* g = c.generate = app.add_subcommand("generate", "generate a random geometric network (HDF5)");
+  g->add_option("-o,--output", c.gen.output, "output network file")->required();
+  g->add_option("--sensors", c.gen.options.sensors, "number of sensors n")->required();
+  g->add_option("--dim", c.gen.options.dim, "dimension p (2 or 3)")->capture_default_str();
+  g->add_option("--avg-degree", c.gen.options.avg_degree, "average sensor-sensor degree")->capture_default_str();
+  g->add_option("--sigma", c.gen.options.sigma, "range noise standard deviation (003 eq. 28)")->capture_default_str();
+  g->add_option("--anchors", c.anchors, "'corners' or a number K of random anchors")->capture_default_str();
+  g->add_option("--anchor-radius", c.gen.options.anchor_radius, "anchor link radius (default: sensor radius)");
+  g->add_option("--seed", c.gen.options.seed, "random seed")->capture_default_str();
+  g->add_option("--localizable", c.localizable, "auto|yes|no: redraw until localizable (auto: n <= 20000)")
+      ->capture_default_str();
+  g->add_option("--max-draws", c.gen.options.max_draws, "redraw limit")->capture_default_str();
+  g->add_flag("-q,--quiet", c.gen.quiet, "print nothing on success");
+}
+
+void add_info(CLI::App& app, Commands& c) {
+  CLI::App* in = c.info_cmd = app.add_subcommand("info", "summarize and validate a network file");
+  in->add_option("network", c.info.network, "network file")->required();
+  in->add_option("--json", c.info.json, "write a JSON summary");
+  in->add_flag("--strict", c.info.strict, "exit non-zero if some sensor cannot be localized");
+}
+
+// The options of snl solve; a flat list of options, hence its length.
+void add_solve(CLI::App& app, Commands& c) {
+  CLI::App* s = c.solve_cmd = app.add_subcommand("solve", "localize the sensors (run under mpirun for parallel runs)");
+  s->add_option("network", c.solve.network, "network file")->required();
+  s->add_option("-o,--output", c.solve.output, "result file")->required();
+  s->add_option("--algorithm", c.solve.solver.algorithm, snl::algorithm_names("|"))->capture_default_str();
+  s->add_option("--max-iter", c.solve.solver.max_iter, "iterations per phase")->capture_default_str();
+  s->add_option("--tol", c.solve.solver.tol, "relative improvement tolerance (0: run --max-iter iterations)")
+      ->capture_default_str();
+  s->add_option("--grad-tol", c.solve.solver.grad_tol,
+                "gradient norm tolerance (0: off; " + honoured_by(&Info::gradient_stop) + ")")
+      ->capture_default_str();
+  s->add_option("--init", c.solve.init, "'random' or a file with dataset positions [n,p]")->capture_default_str();
+  s->add_option("--seed", c.solve.solver.seed, "seed of --init random and of the async activation clock")
+      ->capture_default_str();
+  s->add_option("--partition", c.solve.partition, "metis|block")->capture_default_str();
+  s->add_option("--history-every", c.solve.solver.history_every, "record history every K iterations (0: auto)")
+      ->capture_default_str();
+  s->add_option("--bb-rounds", c.solve.solver.bb_rounds,
+                "consensus rounds per BB iteration (" + honoured_by(&Info::consensus_rounds) + ")")
+      ->capture_default_str();
+  s->add_option("--temporal-block", c.solve.solver.temporal_block,
+                "iterations per pass over memory (same iterates; tests and records at pass ends; " +
+                    honoured_by(&Info::temporal_blocking) + ")")
+      ->capture_default_str();
+  s->add_option("--json", c.solve.json, "write a JSON summary");
+  s->add_option("--checkpoint", c.solve.checkpoint, "write checkpoints to this file (atomically replaced)");
+  s->add_option("--checkpoint-every", c.solve.checkpoint_every, "checkpoint every K iterations");
+  s->add_option("--checkpoint-seconds", c.solve.checkpoint_seconds, "checkpoint every S seconds of wall clock");
+  s->add_option("--restart", c.solve.restart, "resume from a checkpoint (any number of ranks)");
+  s->add_option("--progress-seconds", c.solve.progress_seconds, "seconds between progress lines")
+      ->capture_default_str();
+  s->add_flag("--check-monotone", c.solve.solver.check_monotone, "verify MM's surrogate never increases");
+  s->add_flag("--strict", c.solve.strict, "refuse networks with sensors that cannot be localized");
+  s->add_flag("-q,--quiet", c.solve.quiet, "no progress output");
+}
+
+void add_eval(CLI::App& app, Commands& c) {
+  CLI::App* e = c.eval_cmd = app.add_subcommand("eval", "evaluate a result against a network");
+  e->add_option("network", c.eval.network, "network file")->required();
+  e->add_option("result", c.eval.result, "result file (or any file with positions)")->required();
+  e->add_flag("--crlb", c.eval.crlb, "also compute the Cramer-Rao lower bound (n <= 20000)");
+  e->add_option("--sigma", c.eval.sigma, "noise standard deviation for --crlb (default: the network's)");
+  e->add_option("--json", c.eval.json, "write a JSON summary");
+}
+
+void add_experiment(CLI::App& app, Commands& c) {
+  CLI::App* x = c.experiment_cmd = app.add_subcommand("experiment", "Monte Carlo study over noise draws on a fixed network");
+  x->add_option("network", c.experiment.network, "network file with truth (fixed geometry)")->required();
+  x->add_option("-o,--output", c.experiment.output, "per-trial CSV")->required();
+  x->add_option("--trajectory", c.experiment.trajectory, "CSV of ML cost vs communications per run");
+  x->add_option("--h5", c.experiment.h5, "HDF5 copy of the per-trial table");
+  x->add_option("--sigmas", c.experiment.sigmas, "noise levels")->delimiter(',')->capture_default_str();
+  x->add_option("--trials", c.experiment.trials, "noise draws per sigma")->capture_default_str();
+  x->add_option("--algorithms", c.experiment.algorithms, "methods (" + snl::algorithm_names(",", "", true) + ")")
+      ->delimiter(',')->capture_default_str();
+  x->add_option("--budget", c.experiment.budget, "communications (reals per sensor) per refinement")->capture_default_str();
+  x->add_option("--relax-tol", c.experiment.relax_tol, "relaxation relative-improvement tolerance")->capture_default_str();
+  x->add_option("--relax-max-iter", c.experiment.relax_max_iter, "relaxation iteration limit")->capture_default_str();
+  x->add_option("--points", c.experiment.points, "trajectory points per run")->capture_default_str();
+  x->add_option("--bb-rounds", c.experiment.bb_rounds, "consensus rounds per BB iteration")->capture_default_str();
+  x->add_option("--start", c.experiment.start, "relaxation (refinements from its output) or random (all from one random start)")
+      ->capture_default_str();
+  x->add_option("--tol", c.experiment.tol, "methods' relative-improvement tolerance (0: whole budget)")->capture_default_str();
+  x->add_option("--reach-rel", c.experiment.reach_rel, "relative margin for 'reached the best final cost'")
+      ->capture_default_str();
+  x->add_option("--seed", c.experiment.seed, "seed of the noise draws and starts")->capture_default_str();
+  x->add_option("--partition", c.experiment.partition, "metis|block")->capture_default_str();
+  x->add_flag("-q,--quiet", c.experiment.quiet, "no progress output");
+}
+
+// --anchors and --localizable of snl generate, into its options.
+void parse_generate_choices(Commands& c) {
+  auto& opt = c.gen.options;
+  if (c.anchors == "corners") {
+    opt.num_random_anchors = 0;
+  } else {
+    try {
+      std::size_t pos = 0;
+      opt.num_random_anchors = std::stoi(c.anchors, &pos);
+      if (pos != c.anchors.size() || opt.num_random_anchors < 1) throw std::invalid_argument("");
+    } catch (const std::exception&) {
+      throw snl::Error("--anchors must be 'corners' or a positive number, not '" + c.anchors + "'");
+    }
+  }
+  if (c.localizable == "auto")
+    opt.localizable = snl::GenerateOptions::Localizable::kAuto;
+  else if (c.localizable == "yes")
+    opt.localizable = snl::GenerateOptions::Localizable::kYes;
+  else if (c.localizable == "no")
+    opt.localizable = snl::GenerateOptions::Localizable::kNo;
+  else
+    throw snl::Error("--localizable must be auto, yes or no");
+}
+
+// Runs the chosen subcommand; returns the exit status.
+int run_command(Commands& c, MPI_Comm comm) {
+  if (*c.generate) {
+    parse_generate_choices(c);
+    snl::run_generate(c.gen, comm);
+  } else if (*c.info_cmd) {
+    snl::run_info(c.info, comm);
+  } else if (*c.solve_cmd) {
+    return snl::run_solve(c.solve, comm);
+  } else if (*c.eval_cmd) {
+    snl::run_eval(c.eval, comm);
+  } else if (*c.experiment_cmd) {
+    snl::run_experiment(c.experiment, comm);
+  }
+  return 0;
+}
+
+// run_command with every failure turned into one message and an exit status.
+int run_guarded(Commands& c, MPI_Comm comm) {
+  try {
+    return run_command(c, comm);
+  } catch (const snl::UsageError& err) {
+    // An option the algorithm cannot honour: refused before anything is read or written.
+    return fail(comm, err.what(), snl::kExitUsage);
+  } catch (const snl::Error& err) {
+    // snl::Error is raised identically on every rank: one message, clean exit.
+    return fail(comm, err.what(), 1);
+  } catch (const std::bad_alloc&) {
+    // Anything else may be rank-local: never hang the others.
+    snl::abort_all(comm, "out of memory");
+  } catch (const std::exception& err) {
+    snl::abort_all(comm, std::string("internal error: ") + err.what());
+  }
+  return 1;  // not reached: abort_all does not return
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -29,143 +201,20 @@ int main(int argc, char** argv) {
   CLI::App app{"snl: cooperative sensor network localization from noisy ranges (MPI-parallel)"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "snl 0.1.0");
-
-  snl::GenerateCommand gen;
-  std::string anchors = "corners", localizable = "auto";
-  auto* g = app.add_subcommand("generate", "generate a random geometric network (HDF5)");
-  g->add_option("-o,--output", gen.output, "output network file")->required();
-  g->add_option("--sensors", gen.options.sensors, "number of sensors n")->required();
-  g->add_option("--dim", gen.options.dim, "dimension p (2 or 3)")->capture_default_str();
-  g->add_option("--avg-degree", gen.options.avg_degree, "average sensor-sensor degree")->capture_default_str();
-  g->add_option("--sigma", gen.options.sigma, "range noise standard deviation (003 eq. 28)")->capture_default_str();
-  g->add_option("--anchors", anchors, "'corners' or a number K of random anchors")->capture_default_str();
-  g->add_option("--anchor-radius", gen.options.anchor_radius, "anchor link radius (default: sensor radius)");
-  g->add_option("--seed", gen.options.seed, "random seed")->capture_default_str();
-  g->add_option("--localizable", localizable, "auto|yes|no: redraw until localizable (auto: n <= 20000)")
-      ->capture_default_str();
-  g->add_option("--max-draws", gen.options.max_draws, "redraw limit")->capture_default_str();
-  g->add_flag("-q,--quiet", gen.quiet, "print nothing on success");
-
-  snl::InfoCommand info;
-  auto* in = app.add_subcommand("info", "summarize and validate a network file");
-  in->add_option("network", info.network, "network file")->required();
-  in->add_option("--json", info.json, "write a JSON summary");
-  in->add_flag("--strict", info.strict, "exit non-zero if some sensor cannot be localized");
-
-  snl::SolveCommand solve;
-  auto* s = app.add_subcommand("solve", "localize the sensors (run under mpirun for parallel runs)");
-  s->add_option("network", solve.network, "network file")->required();
-  s->add_option("-o,--output", solve.output, "result file")->required();
-  s->add_option("--algorithm", solve.solver.algorithm, "relaxation|mm|pipeline|bb|pm|async|async-exact")->capture_default_str();
-  s->add_option("--max-iter", solve.solver.max_iter, "iterations per phase")->capture_default_str();
-  s->add_option("--tol", solve.solver.tol, "relative improvement tolerance (0: run --max-iter iterations)")
-      ->capture_default_str();
-  s->add_option("--grad-tol", solve.solver.grad_tol, "gradient norm tolerance (0: off)")->capture_default_str();
-  s->add_option("--init", solve.init, "'random' or a file with dataset positions [n,p]")->capture_default_str();
-  s->add_option("--seed", solve.solver.seed, "seed of --init random and of the async activation clock")->capture_default_str();
-  s->add_option("--partition", solve.partition, "metis|block")->capture_default_str();
-  s->add_option("--history-every", solve.solver.history_every, "record history every K iterations (0: auto)")
-      ->capture_default_str();
-  s->add_option("--bb-rounds", solve.solver.bb_rounds, "consensus rounds per BB iteration")->capture_default_str();
-  s->add_option("--temporal-block", solve.solver.temporal_block,
-                "relaxation/MM iterations per pass over memory (same iterates; tests and records at pass ends)")
-      ->capture_default_str();
-  s->add_option("--json", solve.json, "write a JSON summary");
-  s->add_option("--checkpoint", solve.checkpoint, "write checkpoints to this file (atomically replaced)");
-  s->add_option("--checkpoint-every", solve.checkpoint_every, "checkpoint every K iterations");
-  s->add_option("--checkpoint-seconds", solve.checkpoint_seconds, "checkpoint every S seconds of wall clock");
-  s->add_option("--restart", solve.restart, "resume from a checkpoint (any number of ranks)");
-  s->add_option("--progress-seconds", solve.progress_seconds, "seconds between progress lines")
-      ->capture_default_str();
-  s->add_flag("--check-monotone", solve.solver.check_monotone, "verify MM's surrogate never increases");
-  s->add_flag("--strict", solve.strict, "refuse networks with sensors that cannot be localized");
-  s->add_flag("-q,--quiet", solve.quiet, "no progress output");
-
-  snl::EvalCommand ev;
-  auto* e = app.add_subcommand("eval", "evaluate a result against a network");
-  e->add_option("network", ev.network, "network file")->required();
-  e->add_option("result", ev.result, "result file (or any file with positions)")->required();
-  e->add_flag("--crlb", ev.crlb, "also compute the Cramer-Rao lower bound (n <= 20000)");
-  e->add_option("--sigma", ev.sigma, "noise standard deviation for --crlb (default: the network's)");
-  e->add_option("--json", ev.json, "write a JSON summary");
-
-  snl::ExperimentCommand ex;
-  auto* x = app.add_subcommand("experiment", "Monte Carlo study over noise draws on a fixed network");
-  x->add_option("network", ex.network, "network file with truth (fixed geometry)")->required();
-  x->add_option("-o,--output", ex.output, "per-trial CSV")->required();
-  x->add_option("--trajectory", ex.trajectory, "CSV of ML cost vs communications per run");
-  x->add_option("--h5", ex.h5, "HDF5 copy of the per-trial table");
-  x->add_option("--sigmas", ex.sigmas, "noise levels")->delimiter(',')->capture_default_str();
-  x->add_option("--trials", ex.trials, "noise draws per sigma")->capture_default_str();
-  x->add_option("--algorithms", ex.algorithms, "methods (relaxation,mm,bb,pm,async,async-exact)")
-      ->delimiter(',')->capture_default_str();
-  x->add_option("--budget", ex.budget, "communications (reals per sensor) per refinement")->capture_default_str();
-  x->add_option("--relax-tol", ex.relax_tol, "relaxation relative-improvement tolerance")->capture_default_str();
-  x->add_option("--relax-max-iter", ex.relax_max_iter, "relaxation iteration limit")->capture_default_str();
-  x->add_option("--points", ex.points, "trajectory points per run")->capture_default_str();
-  x->add_option("--bb-rounds", ex.bb_rounds, "consensus rounds per BB iteration")->capture_default_str();
-  x->add_option("--start", ex.start, "relaxation (refinements from its output) or random (all from one random start)")
-      ->capture_default_str();
-  x->add_option("--tol", ex.tol, "methods' relative-improvement tolerance (0: whole budget)")->capture_default_str();
-  x->add_option("--reach-rel", ex.reach_rel, "relative margin for 'reached the best final cost'")
-      ->capture_default_str();
-  x->add_option("--seed", ex.seed, "seed of the noise draws and starts")->capture_default_str();
-  x->add_option("--partition", ex.partition, "metis|block")->capture_default_str();
-  x->add_flag("-q,--quiet", ex.quiet, "no progress output");
-
+  Commands c;
+  add_generate(app, c);
+  add_info(app, c);
+  add_solve(app, c);
+  add_eval(app, c);
+  add_experiment(app, c);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& err) {
-    int status = 0;
-    if (root)
-      status = app.exit(err);
-    else
-      status = err.get_exit_code();
+    const int status = root ? app.exit(err) : err.get_exit_code();
     MPI_Finalize();
     return status;
   }
-
-  int status = 0;
-  try {
-    if (*g) {
-      if (anchors == "corners")
-        gen.options.num_random_anchors = 0;
-      else {
-        try {
-          std::size_t pos = 0;
-          gen.options.num_random_anchors = std::stoi(anchors, &pos);
-          if (pos != anchors.size() || gen.options.num_random_anchors < 1) throw std::invalid_argument("");
-        } catch (const std::exception&) {
-          throw snl::Error("--anchors must be 'corners' or a positive number, not '" + anchors + "'");
-        }
-      }
-      if (localizable == "auto")
-        gen.options.localizable = snl::GenerateOptions::Localizable::kAuto;
-      else if (localizable == "yes")
-        gen.options.localizable = snl::GenerateOptions::Localizable::kYes;
-      else if (localizable == "no")
-        gen.options.localizable = snl::GenerateOptions::Localizable::kNo;
-      else
-        throw snl::Error("--localizable must be auto, yes or no");
-      snl::run_generate(gen, comm);
-    } else if (*in) {
-      snl::run_info(info, comm);
-    } else if (*s) {
-      status = snl::run_solve(solve, comm);
-    } else if (*e) {
-      snl::run_eval(ev, comm);
-    } else if (*x) {
-      snl::run_experiment(ex, comm);
-    }
-  } catch (const snl::Error& err) {
-    // snl::Error is raised identically on every rank: one message, clean exit.
-    status = fail(comm, err.what(), 1);
-  } catch (const std::bad_alloc&) {
-    // Anything else may be rank-local: never hang the others.
-    snl::abort_all(comm, "out of memory");
-  } catch (const std::exception& err) {
-    snl::abort_all(comm, std::string("internal error: ") + err.what());
-  }
+  const int status = run_guarded(c, comm);
   // After a failed H5Fclose (disk full) HDF5 would crash in its shutdown inside
   // MPI_Finalize (snl::h5_close_failed): then every rank leaves without it, with
   // the status already decided (the error was reported above).

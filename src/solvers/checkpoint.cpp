@@ -3,10 +3,13 @@
 #include <algorithm>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 
 #include "snl/core/mpi_util.hpp"
 #include "snl/core/random.hpp"
+#include "snl/solvers/registry.hpp"
+#include "snl/solvers/solver.hpp"
 
 namespace snl {
 
@@ -191,6 +194,117 @@ void StateReader::anchor_rows(const std::string& name, double* per_entry, int wi
     }
   const auto vals = read_keyed(f_, prefix_ + name, want, width, prob_.num_sensors());
   std::copy(vals.begin(), vals.end(), per_entry);
+}
+
+// ---------------------------------------------------------------------------
+// History columns: the one table checkpoints and result files use.
+
+namespace {
+using H = IterationSummary;
+const std::vector<HistoryColumn> kHistoryColumns = {
+    // checkpoint name, result-file name, needs truth, get, set
+    {"total_iteration", "iteration", false, [](const H& h) { return double(h.total_iteration); },
+     [](H& h, double v) { h.total_iteration = static_cast<std::int64_t>(v); }},
+    {"iteration", "phase_iteration", false, [](const H& h) { return double(h.iteration); },
+     [](H& h, double v) { h.iteration = static_cast<std::int64_t>(v); }},
+    {"phase", "phase", false, [](const H& h) { return double(algorithm_code(h.phase)); },
+     [](H& h, double v) { h.phase = algorithm_name(static_cast<int>(v)); }},
+    {"cost", "cost", false, [](const H& h) { return h.cost; }, [](H& h, double v) { h.cost = v; }},
+    {"ml_cost", "ml_cost", false, [](const H& h) { return h.ml_cost; }, [](H& h, double v) { h.ml_cost = v; }},
+    {"messages", "communications", false, [](const H& h) { return h.messages; },
+     [](H& h, double v) { h.messages = v; }},
+    {"reals", "reals", false, [](const H& h) { return h.reals; }, [](H& h, double v) { h.reals = v; }},
+    {"rel_change", "rel_change", false, [](const H& h) { return h.rel_change; },
+     [](H& h, double v) { h.rel_change = v; }},
+    {"grad_norm", "grad_norm", false, [](const H& h) { return h.grad_norm; }, [](H& h, double v) { h.grad_norm = v; }},
+    {"elapsed", "elapsed", false, [](const H& h) { return h.elapsed; }, [](H& h, double v) { h.elapsed = v; }},
+    {"rmse", "rmse", true, [](const H& h) { return h.rmse; }, [](H& h, double v) { h.rmse = v; }},
+    {"mpe", "mpe", true, [](const H& h) { return h.mpe; }, [](H& h, double v) { h.mpe = v; }},
+};
+}  // namespace
+
+const std::vector<HistoryColumn>& history_columns() { return kHistoryColumns; }
+
+std::vector<double> history_column(const std::vector<IterationSummary>& h, const HistoryColumn& c) {
+  std::vector<double> v;
+  v.reserve(h.size());
+  for (const auto& it : h) v.push_back(c.get(it));
+  return v;
+}
+
+// ---------------------------------------------------------------------------
+// Checkpoint files: header attributes, history columns, algorithm state.
+
+void write_checkpoint(const std::string& path, const LocalizationProblem& prob, const CheckpointHeader& h,
+                      const std::vector<IterationSummary>& history, const Algorithm& alg) {
+  static const double delay = [] {
+    const char* d = std::getenv("SNL_TEST_CHECKPOINT_DELAY");  // test hook: a slow checkpoint write
+    return d ? std::atof(d) : 0.0;
+  }();
+  H5File f(path, prob.comm(), H5File::Mode::kCreate);
+  f.set_attr("format", std::string("snl-checkpoint"));
+  f.set_attr("version", std::int64_t(1));
+  f.set_attr("network_fingerprint", h.network_fingerprint);
+  f.set_attr("options", h.options);
+  f.set_attr("algorithm", h.algorithm);
+  f.set_attr("phase", h.phase);
+  f.set_attr("phase_algorithm", h.phase_algorithm);
+  f.set_attr("phase_iteration", h.phase_iteration);
+  f.set_attr("total_iteration", h.total_iteration);
+  f.set_attr("messages", h.messages);
+  f.set_attr("reals", h.reals);
+  f.set_attr("elapsed", h.elapsed);
+  f.set_attr("ranks", h.ranks);
+  f.set_attr("num_sensors", h.num_sensors);
+  f.set_attr("dim", h.dim);
+  for (const auto& c : kHistoryColumns)
+    f.write_replicated(std::string("history/") + c.name, history_column(history, c));
+  StateWriter w(f, prob);
+  alg.save(w);
+  if (delay > 0) {
+    MPI_Barrier(prob.comm());
+    const double until = MPI_Wtime() + delay;
+    while (MPI_Wtime() < until) {
+    }
+  }
+  f.commit();
+}
+
+CheckpointHeader read_checkpoint_header(const H5File& f, const std::string& network_fingerprint,
+                                        const std::string& options) {
+  const std::string what = f.path() + ": ";
+  if (!f.has_attr("format") || f.attr_string("format") != "snl-checkpoint")
+    throw Error(what + "not an snl checkpoint (attribute format != snl-checkpoint)");
+  if (f.attr_int("version") != 1) throw Error(what + "unsupported checkpoint version");
+  if (f.attr_string("network_fingerprint") != network_fingerprint)
+    throw Error(what + "checkpoint of another network (fingerprint " + f.attr_string("network_fingerprint") +
+                ", this network " + network_fingerprint + ")");
+  if (f.attr_string("options") != options)
+    throw Error(what + "checkpoint of incompatible options (" + f.attr_string("options") + "; now " + options + ")");
+  CheckpointHeader h;
+  h.network_fingerprint = network_fingerprint;
+  h.options = options;
+  h.phase = f.attr_int("phase");
+  h.phase_iteration = f.attr_int("phase_iteration");
+  h.total_iteration = f.attr_int("total_iteration");
+  h.messages = f.attr_double("messages");
+  h.reals = f.attr_double("reals");
+  h.elapsed = f.attr_double("elapsed");
+  return h;
+}
+
+std::vector<IterationSummary> read_checkpoint_history(const H5File& f) {
+  const auto len = f.shape("history/phase");
+  const std::uint64_t rows = len.empty() ? 0 : len[0];
+  std::vector<std::vector<double>> cols;
+  for (const auto& c : kHistoryColumns) {
+    cols.push_back(f.read_rows_double(std::string("history/") + c.name, 0, rows));
+    if (cols.back().size() != cols.front().size()) throw Error(f.path() + ": malformed history");
+  }
+  std::vector<IterationSummary> history(cols.front().size());
+  for (std::size_t c = 0; c < kHistoryColumns.size(); ++c)
+    for (std::size_t r = 0; r < history.size(); ++r) kHistoryColumns[c].set(history[r], cols[c][r]);
+  return history;
 }
 
 std::string network_fingerprint(const Network& s, MPI_Comm comm) {

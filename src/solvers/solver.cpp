@@ -3,9 +3,7 @@
 #include <mpi.h>
 
 #include <algorithm>
-#include <cstdlib>
-#include <iterator>
-#include <cstdio>
+#include <cmath>
 #include <sstream>
 
 #include "snl/core/mpi_util.hpp"
@@ -23,29 +21,37 @@ const char* to_string(TerminationType t) {
   return "?";
 }
 
-namespace {
-const char* const kAlgorithmNames[] = {"relaxation", "mm", "bb", "pm", "async", "async-exact"};
-}  // namespace
-
-int algorithm_code(const std::string& name) {
-  for (int c = 0; c < 6; ++c)
-    if (name == kAlgorithmNames[c]) return c;
-  return 9;
-}
-
-const char* algorithm_name(int code) { return code >= 0 && code < 6 ? kAlgorithmNames[code] : "?"; }
-
 std::string SolverOptions::validate() const {
-  static const char* known[] = {"relaxation", "mm", "pipeline", "bb", "pm", "async", "async-exact"};
-  if (std::find_if(std::begin(known), std::end(known), [&](const char* k) { return algorithm == k; }) ==
-      std::end(known))
-    return "unknown --algorithm '" + algorithm + "' (expected relaxation, mm, pipeline, bb, pm, async or async-exact)";
+  if (!find_algorithm(algorithm))
+    return "unknown --algorithm '" + algorithm + "' (expected " + algorithm_names(", ", " or ") + ")";
   if (max_iter < 0) return "--max-iter must be >= 0";
   if (!(tol >= 0) || !std::isfinite(tol)) return "--tol must be a finite number >= 0";
   if (!(grad_tol >= 0) || !std::isfinite(grad_tol)) return "--grad-tol must be a finite number >= 0";
   if (history_every < 0) return "--history-every must be >= 0";
   if (bb_rounds < 1 || bb_rounds > 10000) return "--bb-rounds must be in [1, 10000]";
   if (temporal_block < 1 || temporal_block > 64) return "--temporal-block must be in [1, 64]";
+  return unsupported_option();
+}
+
+std::string SolverOptions::unsupported_option() const {
+  const AlgorithmInfo* a = find_algorithm(algorithm);
+  if (!a) return "";
+  const SolverOptions defaults;
+  // Each option with the capability that honours it; the message names the methods that have it.
+  const struct {
+    bool set;
+    const char* option;
+    bool AlgorithmInfo::*capability;
+    const char* default_value;
+  } checks[] = {
+      {grad_tol != defaults.grad_tol, "--grad-tol", &AlgorithmInfo::gradient_stop, "0"},
+      {temporal_block != defaults.temporal_block, "--temporal-block", &AlgorithmInfo::temporal_blocking, "1"},
+      {bb_rounds != defaults.bb_rounds, "--bb-rounds", &AlgorithmInfo::consensus_rounds, "20"},
+  };
+  for (const auto& c : checks)
+    if (c.set && !(a->*c.capability))
+      return std::string(c.option) + " is not honoured by --algorithm " + algorithm + " (only by " +
+             algorithms_with(c.capability) + "); leave it out or give its default " + c.default_value;
   return "";
 }
 
@@ -69,28 +75,6 @@ Solver::Solver(LocalizationProblem& prob, SolverOptions opt) : prob_(prob), opt_
   if (!err.empty()) throw Error(err);
 }
 
-namespace {
-
-
-
-// History as columns (checkpoints) and back.
-const char* kHistoryColumns[] = {"phase",     "iteration", "total_iteration", "cost",  "ml_cost", "rel_change",
-                                 "grad_norm", "rmse",      "mpe",             "messages", "reals", "elapsed"};
-
-std::vector<double> history_column(const std::vector<IterationSummary>& h, int c) {
-  std::vector<double> v;
-  v.reserve(h.size());
-  for (const auto& it : h) {
-    const double vals[] = {double(algorithm_code(it.phase)), double(it.iteration), double(it.total_iteration), it.cost,
-                           it.ml_cost, it.rel_change, it.grad_norm, it.rmse, it.mpe, it.messages, it.reals,
-                           it.elapsed};
-    v.push_back(vals[c]);
-  }
-  return v;
-}
-
-}  // namespace
-
 std::string Solver::options_fingerprint() const {
   std::ostringstream os;
   os.precision(17);
@@ -101,323 +85,391 @@ std::string Solver::options_fingerprint() const {
   return os.str();
 }
 
-Summary Solver::solve(const std::vector<double>& x0, std::vector<double>* x_out) {
-  MPI_Comm comm = prob_.comm();
-  const int p = prob_.dim();
-  const bool root = comm_rank(comm) == 0;
-  double t0 = MPI_Wtime();
-  HaloPlan& halo = prob_.graph().halo();
-  halo.reset_counters();
-  std::int64_t instrumentation_bytes = 0;
 
-  Summary sum;
-  sum.algorithm = opt_.algorithm;
-  sum.ranks = comm_size(comm);
-  std::vector<std::string> phases;
-  if (opt_.algorithm == "pipeline")
-    phases = {"relaxation", "mm"};
-  else
-    phases = {opt_.algorithm};
+// ---------------------------------------------------------------------------
+// One call of solve(): the run's state and its steps. The phases run in turn
+// (the pipeline: relaxation, then MM from where it ended); each phase is a loop
+// of passes of up to temporal_block iterations: iterate, reduce the stopping
+// sums, test for a stop, record, checkpoint.
+class Solver::Run {
+ public:
+  Run(const Solver& s, const std::vector<double>& x0);
+  void restore();  // from ckpt_.restart, if given
+  void run_phases();
+  Summary finish(std::vector<double>* x_out);
 
-  // Scratch for metrics: a local array whose ghost rows the metrics exchange.
-  std::vector<double> xs(std::size_t(prob_.num_local()) * p, 0.0);
-  auto metrics_at = [&](const std::vector<double>& x, IterationSummary& it) {
-    const std::int64_t b0 = halo.bytes_sent();
-    std::copy(x.begin(), x.begin() + std::size_t(prob_.num_owned()) * p, xs.begin());
-    halo.exchange(xs.data(), p);
-    it.ml_cost = evaluate_costs(prob_, xs.data()).ml;
-    const ErrorMetrics em = evaluate_errors(prob_, xs.data());
-    it.rmse = em.rmse;
-    it.mpe = em.mpe;
-    instrumentation_bytes += halo.bytes_sent() - b0;
-  };
-  auto objective_of = [&](Algorithm& alg) {
-    const std::int64_t b0 = halo.bytes_sent();
-    const double f = alg.objective();
-    instrumentation_bytes += halo.bytes_sent() - b0;
-    return f;
-  };
-
-  std::vector<double> x = x0;
-  x.resize(std::size_t(prob_.num_owned()) * p);
-  double messages = 0, reals = 0;
-  std::int64_t total_it = 0;
-  std::size_t first_phase = 0;
-  std::int64_t resume_k = -1;  // >= 0: resume phase first_phase at this iteration
-
-  // ---- restart: verify the checkpoint matches this network and these options.
-  std::unique_ptr<H5File> restart_file;
-  if (!ckpt_.restart.empty()) {
-    restart_file = std::make_unique<H5File>(ckpt_.restart, comm, H5File::Mode::kRead);
-    H5File& f = *restart_file;
-    const std::string what = ckpt_.restart + ": ";
-    if (!f.has_attr("format") || f.attr_string("format") != "snl-checkpoint")
-      throw Error(what + "not an snl checkpoint (attribute format != snl-checkpoint)");
-    if (f.attr_int("version") != 1) throw Error(what + "unsupported checkpoint version");
-    if (f.attr_string("network_fingerprint") != ckpt_.network_fingerprint)
-      throw Error(what + "checkpoint of another network (fingerprint " + f.attr_string("network_fingerprint") +
-                  ", this network " + ckpt_.network_fingerprint + ")");
-    if (f.attr_string("options") != options_fingerprint())
-      throw Error(what + "checkpoint of incompatible options (" + f.attr_string("options") + "; now " +
-                  options_fingerprint() + ")");
-    first_phase = static_cast<std::size_t>(f.attr_int("phase"));
-    resume_k = f.attr_int("phase_iteration");
-    total_it = f.attr_int("total_iteration");
-    messages = f.attr_double("messages");
-    reals = f.attr_double("reals");
-    t0 -= f.attr_double("elapsed");
-    if (first_phase >= phases.size() || resume_k < 0 || resume_k > opt_.max_iter)
-      throw Error(what + "checkpoint state out of range");
-    std::vector<std::vector<double>> cols;
-    const auto len = f.shape("history/phase");
-    for (const char* c : kHistoryColumns) {
-      cols.push_back(f.read_rows_double(std::string("history/") + c, 0, len.empty() ? 0 : len[0]));
-      if (cols.back().size() != cols.front().size()) throw Error(what + "malformed history");
-    }
-    for (std::size_t r = 0; r < cols[0].size(); ++r) {
-      IterationSummary it;
-      it.phase = algorithm_name(static_cast<int>(cols[0][r]));
-      it.iteration = static_cast<std::int64_t>(cols[1][r]);
-      it.total_iteration = static_cast<std::int64_t>(cols[2][r]);
-      it.cost = cols[3][r];
-      it.ml_cost = cols[4][r];
-      it.rel_change = cols[5][r];
-      it.grad_norm = cols[6][r];
-      it.rmse = cols[7][r];
-      it.mpe = cols[8][r];
-      it.messages = cols[9][r];
-      it.reals = cols[10][r];
-      it.elapsed = cols[11][r];
-      sum.history.push_back(it);
-    }
-  }
-
-  static const double delay = [] {
-    const char* d = std::getenv("SNL_TEST_CHECKPOINT_DELAY");  // test hook: a slow checkpoint write
-    return d ? std::atof(d) : 0.0;
-  }();
-  double last_ckpt = MPI_Wtime();
-  auto write_checkpoint = [&](const Algorithm& alg, std::size_t ph, std::int64_t k) {
-    H5File f(ckpt_.path, comm, H5File::Mode::kCreate);
-    f.set_attr("format", std::string("snl-checkpoint"));
-    f.set_attr("version", std::int64_t(1));
-    f.set_attr("network_fingerprint", ckpt_.network_fingerprint);
-    f.set_attr("options", options_fingerprint());
-    f.set_attr("algorithm", opt_.algorithm);
-    f.set_attr("phase", std::int64_t(ph));
-    f.set_attr("phase_algorithm", alg.name());
-    f.set_attr("phase_iteration", k);
-    f.set_attr("total_iteration", total_it);
-    f.set_attr("messages", messages);
-    f.set_attr("reals", reals);
-    f.set_attr("elapsed", MPI_Wtime() - t0);
-    f.set_attr("ranks", std::int64_t(comm_size(comm)));
-    f.set_attr("num_sensors", std::int64_t(prob_.num_sensors()));
-    f.set_attr("dim", std::int64_t(p));
-    for (int c = 0; c < static_cast<int>(std::size(kHistoryColumns)); ++c)
-      f.write_replicated(std::string("history/") + kHistoryColumns[c], history_column(sum.history, c));
-    StateWriter w(f, prob_);
-    alg.save(w);
-    if (delay > 0) {
-      MPI_Barrier(comm);
-      const double until = MPI_Wtime() + delay;
-      while (MPI_Wtime() < until) {
-      }
-    }
-    f.commit();
-    last_ckpt = MPI_Wtime();
-  };
-  const bool checkpointing = !ckpt_.path.empty();
-
-  bool stop_all = false;
-  double iter_time = 0, iter_wait = 0;
-  for (std::size_t ph = first_phase; ph < phases.size() && !stop_all; ++ph) {
-    std::unique_ptr<Algorithm> alg = make_algorithm(phases[ph], prob_, opt_);
-    alg->start(x);
-    {
-      long long b = alg->memory_bytes(), all = 0;
-      MPI_Allreduce(&b, &all, 1, MPI_LONG_LONG, MPI_SUM, comm);
-      sum.algorithm_state_bytes = std::max<std::int64_t>(sum.algorithm_state_bytes, all);
-      double tb = alg->traffic_bytes_per_iteration(), tb_all = 0;
-      MPI_Allreduce(&tb, &tb_all, 1, MPI_DOUBLE, MPI_SUM, comm);
-      sum.phase_traffic_bytes.emplace_back(phases[ph], tb_all);
-    }
-    double phase_time = 0;
-    std::int64_t k = 0;
-    if (restart_file && ph == first_phase) {
-      alg->load(StateReader(*restart_file, prob_));
-      k = resume_k;
-      restart_file.reset();
-    }
-    sum.lipschitz = alg->lipschitz();
-    // Auto: every iteration for small runs; about 1000 records per phase for
-    // long ones; at least every 10 iterations on large networks, where a
-    // record (an extra exchange and two reductions) costs about an iteration.
-    std::int64_t every = opt_.history_every;
-    if (every <= 0) {
-      every = opt_.max_iter <= 2000 ? 1 : (opt_.max_iter + 999) / 1000;
-      if (prob_.num_sensors() > 100000) every = std::max<std::int64_t>(every, 10);
-    }
-    // Temporal blocking: passes of up to `block` iterations, ending at every
-    // record and checkpoint iteration (so these see the same iterates); the
-    // automatic record interval becomes a multiple of the pass.
-    const std::int64_t block = std::max(1, std::min(opt_.temporal_block, alg->max_levels()));
-    if (opt_.history_every <= 0) every = (every + block - 1) / block * block;
-    double prev_obj = objective_of(*alg);
-    if (k == 0) {
-      sum.initial_cost = prev_obj;
-      IterationSummary it;
-      it.phase = alg->name();
-      it.total_iteration = total_it;
-      it.cost = prev_obj;
-      it.messages = messages;
-      it.reals = reals;
-      it.elapsed = MPI_Wtime() - t0;
-      metrics_at(alg->positions(), it);
-      sum.history.push_back(it);
-    }
+ private:
+  struct Phase {
+    std::size_t index = 0;                // in phases_
+    const AlgorithmInfo* info = nullptr;  // of this phase's method
+    std::unique_ptr<Algorithm> alg;
+    std::int64_t k = 0;         // iterations done in this phase
+    std::int64_t every = 1;     // record interval
+    std::int64_t block = 1;     // iterations per pass at most
+    double prev_obj = 0;        // for check_monotone
+    double time = 0;            // in iterate()
     TerminationType term = TerminationType::kNoConvergence;
     std::string msg;
-    while (k < opt_.max_iter) {
-      std::int64_t n = std::min({block, opt_.max_iter - k, every - k % every});  // iterations in this pass
-      if (checkpointing && ckpt_.every > 0) n = std::min(n, ckpt_.every - k % ckpt_.every);
-      const double w0 = halo.wait_seconds(), ti = MPI_Wtime();
-      // A rank-local failure (std::bad_alloc) while the others wait in the
-      // iteration's collectives cannot be agreed on: it aborts every rank.
-      abort_on_local_failure(comm, "iteration", [&] {
-        for (std::int64_t i = 1; i <= n; ++i) test_fail_point("solve", total_it + i);  // fault-injection tests
-        alg->iterate_levels(static_cast<int>(n));
-      });
-      const double dt = MPI_Wtime() - ti;
-      phase_time += dt;
-      iter_wait += halo.wait_seconds() - w0;
-      k += n;
-      total_it += n;
-      for (std::int64_t i = 0; i < n; ++i) {  // summed as one iteration at a time
-        messages += alg->messages_per_iteration();
-        reals += alg->reals_per_iteration();
-      }
-      // One reduction per pass: stopping sums, and flags every rank must
-      // agree on (a stop signal on any rank; rank 0's checkpoint clock).
-      double loc[5] = {0, 0, 0, 0, 0}, glob[5];
-      alg->change_norms(&loc[0], &loc[1]);
-      loc[2] = alg->grad_norm_sq();
-      if (!std::isfinite(loc[2])) loc[2] = 0;
-      loc[3] = (ckpt_.stop_on_signal && stop_signal_received()) ? 1 : 0;
-      loc[4] = (root && checkpointing && ckpt_.seconds > 0 && MPI_Wtime() - last_ckpt >= ckpt_.seconds) ? 1 : 0;
-      MPI_Allreduce(loc, glob, 3, MPI_DOUBLE, MPI_SUM, comm);
-      MPI_Allreduce(loc + 3, glob + 3, 2, MPI_DOUBLE, MPI_MAX, comm);
-      const double rel = glob[1] > 0 ? std::sqrt(glob[0] / glob[1]) : std::sqrt(glob[0]);
-      const double gnorm = std::sqrt(glob[2]);
-      if (!std::isfinite(glob[0]) || !std::isfinite(glob[1])) {
-        term = TerminationType::kFailure;
-        msg = "non-finite iterate";
-        stop_all = true;
-        break;
-      }
-      bool converged = false;
-      if (opt_.tol > 0 && rel <= opt_.tol) {
-        converged = true;
-        msg = "relative improvement " + std::to_string(rel) + " <= tol";
-      } else if (opt_.grad_tol > 0 && std::isfinite(alg->grad_norm_sq()) && gnorm <= opt_.grad_tol) {
-        converged = true;
-        msg = "gradient norm " + std::to_string(gnorm) + " <= grad_tol";
-      }
-      if (opt_.check_monotone && alg->name() == "mm") {
-        const double f = objective_of(*alg);
-        // Rounding floor: at an exact fit (sigma = 0) F is ~1e-31 and jitters.
-        if (f > prev_obj * (1 + 1e-12) + 1e-24)
-          throw Error("MM surrogate increased at iteration " + std::to_string(k) + ": " + std::to_string(prev_obj) +
-                      " -> " + std::to_string(f));
-        prev_obj = f;
-      }
-      const bool last = converged || k == opt_.max_iter;
-      if (k % every == 0 || last) {
-        IterationSummary it;
-        it.phase = alg->name();
-        it.iteration = k;
-        it.total_iteration = total_it;
-        it.cost = objective_of(*alg);
-        it.rel_change = rel;
-        it.grad_norm = std::isfinite(alg->grad_norm_sq()) ? gnorm : NAN;
-        it.messages = messages;
-        it.reals = reals;
-        it.elapsed = MPI_Wtime() - t0;
-        metrics_at(alg->positions(), it);
-        sum.history.push_back(it);
-        bool abort = false;
-        for (auto* cb : callbacks_) abort |= (*cb)(it) == CallbackReturn::kAbort;
-        if (abort) {
-          term = TerminationType::kUserAbort;
-          msg = "stopped by a callback";
-          stop_all = true;
-          break;
-        }
-      }
-      if (converged) {
-        term = TerminationType::kConvergence;
-        break;
-      }
-      // Checkpoint only while the phase goes on, so a resume never repeats a stop.
-      const bool signalled = glob[3] > 0;
-      if (checkpointing && !last &&
-          (signalled || glob[4] > 0 || (ckpt_.every > 0 && k % ckpt_.every == 0)))
-        write_checkpoint(*alg, ph, k);
-      if (signalled) {
-        term = TerminationType::kSignal;
-        msg = checkpointing ? "stopped by a signal; checkpoint written to " + ckpt_.path
-                            : "stopped by a signal (no --checkpoint given)";
-        stop_all = true;
-        break;
-      }
-    }
-    iter_time += phase_time;
-    {
-      double g = 0;
-      MPI_Allreduce(&phase_time, &g, 1, MPI_DOUBLE, MPI_MAX, comm);
-      sum.phase_iterate_seconds.emplace_back(alg->name(), g);
-    }
-    if (term == TerminationType::kNoConvergence) msg = "reached --max-iter";
-    const auto& xp = alg->positions();
-    std::copy(xp.begin(), xp.begin() + std::size_t(prob_.num_owned()) * p, x.begin());
-    if (alg->name() == "relaxation") {
-      std::copy(x.begin(), x.end(), xs.begin());
-      const std::int64_t b1 = halo.bytes_sent();
-      halo.exchange(xs.data(), p);
-      instrumentation_bytes += halo.bytes_sent() - b1;
-      const CostTerms c = evaluate_costs(prob_, xs.data());
-      sum.gap_certificate = c.certificate;
-      sum.relaxed_optimum = c.relaxed;
-    }
-    sum.final_cost = objective_of(*alg);
-    sum.termination = term;
-    sum.message = phases.size() > 1 ? alg->name() + ": " + msg : msg;
-    sum.converged = term == TerminationType::kConvergence;
-  }
-  sum.iterations = total_it;
+  };
+  // What the one reduction per pass tells every rank.
+  struct PassResult {
+    double rel = 0, gnorm = 0;
+    bool finite = true;
+    bool signalled = false;  // a stop signal on some rank
+    bool clock = false;      // rank 0's checkpoint clock ran out
+  };
 
-  // Final metrics at the solution.
-  std::copy(x.begin(), x.end(), xs.begin());
-  const std::int64_t b0 = halo.bytes_sent();
-  halo.exchange(xs.data(), p);
-  sum.costs = evaluate_costs(prob_, xs.data());
-  sum.errors = evaluate_errors(prob_, xs.data());
-  instrumentation_bytes += halo.bytes_sent() - b0;
-  sum.messages_per_sensor = messages;
-  sum.reals_per_sensor = reals;
-  long long mine = halo.bytes_sent() - instrumentation_bytes, all = 0;
-  MPI_Allreduce(&mine, &all, 1, MPI_LONG_LONG, MPI_SUM, comm);
-  sum.mpi_bytes = all;
-  sum.wall_seconds = MPI_Wtime() - t0;
-  double wf = sum.wall_seconds > 0 ? halo.wait_seconds() / sum.wall_seconds : 0, wfm = 0;
-  MPI_Allreduce(&wf, &wfm, 1, MPI_DOUBLE, MPI_MAX, comm);
-  sum.comm_wait_fraction = wfm;
-  double it_loc[2] = {iter_time, iter_wait}, it_max[2];
-  MPI_Allreduce(it_loc, it_max, 2, MPI_DOUBLE, MPI_MAX, comm);
-  sum.iterate_seconds = it_max[0];
-  sum.iterate_wait_seconds = it_max[1];
-  if (x_out) *x_out = x;
-  return sum;
+  void start_phase(Phase& ph);
+  void set_pass_sizes(Phase& ph) const;
+  bool pass(Phase& ph);  // false: the phase ends
+  std::int64_t pass_length(const Phase& ph) const;
+  void iterate(Phase& ph, std::int64_t n);
+  PassResult reduce(const Phase& ph);
+  bool test_stop(Phase& ph, const PassResult& r) const;
+  void check_monotone(Phase& ph);
+  void record_start(const Phase& ph);
+  bool record(const Phase& ph, const PassResult& r);  // true: a callback asked to stop
+  void checkpoint(const Phase& ph);
+  bool stop(Phase& ph, TerminationType t, std::string msg);
+  void end_phase(Phase& ph);
+  void metrics_at(const std::vector<double>& x, IterationSummary& it);
+  double objective_of(Algorithm& alg);
+
+  const Solver& s_;
+  LocalizationProblem& prob_;
+  const SolverOptions& opt_;
+  const CheckpointConfig& ckpt_;
+  MPI_Comm comm_;
+  int p_;
+  bool root_;
+  double t0_;
+  HaloPlan& halo_;
+  std::int64_t instrumentation_bytes_ = 0;  // halo bytes of metrics, not of the methods
+  Summary sum_;
+  std::vector<AlgorithmId> phases_;
+  std::vector<double> xs_;  // scratch for metrics: a local array whose ghost rows they exchange
+  std::vector<double> x_;   // owned rows: the start of the next phase, the result at the end
+  double messages_ = 0, reals_ = 0;
+  std::int64_t total_it_ = 0;
+  std::size_t first_phase_ = 0;
+  std::int64_t resume_k_ = -1;  // >= 0: resume phase first_phase_ at this iteration
+  std::unique_ptr<H5File> restart_file_;
+  double last_ckpt_ = 0;
+  bool checkpointing_;
+  bool stop_all_ = false;
+  double iter_time_ = 0, iter_wait_ = 0;
+};
+
+Summary Solver::solve(const std::vector<double>& x0, std::vector<double>* x_out) {
+  Run run(*this, x0);
+  run.restore();
+  run.run_phases();
+  return run.finish(x_out);
+}
+
+Solver::Run::Run(const Solver& s, const std::vector<double>& x0)
+    : s_(s),
+      prob_(s.prob_),
+      opt_(s.opt_),
+      ckpt_(s.ckpt_),
+      comm_(prob_.comm()),
+      p_(prob_.dim()),
+      root_(comm_rank(comm_) == 0),
+      t0_(MPI_Wtime()),
+      halo_(prob_.graph().halo()),
+      checkpointing_(!ckpt_.path.empty()) {
+  halo_.reset_counters();
+  sum_.algorithm = opt_.algorithm;
+  sum_.ranks = comm_size(comm_);
+  phases_ = find_algorithm(opt_.algorithm)->phases;  // known: the options were validated
+  xs_.assign(std::size_t(prob_.num_local()) * p_, 0.0);
+  x_ = x0;
+  x_.resize(std::size_t(prob_.num_owned()) * p_);
+}
+
+// Verifies the checkpoint matches this network and these options, and takes
+// over its counters and history; its state is loaded when its phase starts.
+void Solver::Run::restore() {
+  if (!ckpt_.restart.empty()) {
+    restart_file_ = std::make_unique<H5File>(ckpt_.restart, comm_, H5File::Mode::kRead);
+    const CheckpointHeader h =
+        read_checkpoint_header(*restart_file_, ckpt_.network_fingerprint, s_.options_fingerprint());
+    first_phase_ = static_cast<std::size_t>(h.phase);
+    resume_k_ = h.phase_iteration;
+    total_it_ = h.total_iteration;
+    messages_ = h.messages;
+    reals_ = h.reals;
+    t0_ -= h.elapsed;
+    if (first_phase_ >= phases_.size() || resume_k_ < 0 || resume_k_ > opt_.max_iter)
+      throw Error(ckpt_.restart + ": checkpoint state out of range");
+    sum_.history = read_checkpoint_history(*restart_file_);
+  }
+  last_ckpt_ = MPI_Wtime();
+}
+
+void Solver::Run::run_phases() {
+  for (std::size_t i = first_phase_; i < phases_.size() && !stop_all_; ++i) {
+    Phase ph;
+    ph.index = i;
+    ph.info = &algorithm_info(phases_[i]);
+    start_phase(ph);
+    while (ph.k < opt_.max_iter && pass(ph)) {
+    }
+    end_phase(ph);
+  }
+}
+
+void Solver::Run::start_phase(Phase& ph) {
+  ph.alg = make_algorithm(phases_[ph.index], prob_, opt_);
+  ph.alg->start(x_);
+  long long b = ph.alg->memory_bytes(), all = 0;
+  MPI_Allreduce(&b, &all, 1, MPI_LONG_LONG, MPI_SUM, comm_);
+  sum_.algorithm_state_bytes = std::max<std::int64_t>(sum_.algorithm_state_bytes, all);
+  double tb = ph.alg->traffic_bytes_per_iteration(), tb_all = 0;
+  MPI_Allreduce(&tb, &tb_all, 1, MPI_DOUBLE, MPI_SUM, comm_);
+  sum_.phase_traffic_bytes.emplace_back(ph.info->name, tb_all);
+  if (restart_file_ && ph.index == first_phase_) {
+    ph.alg->load(StateReader(*restart_file_, prob_));
+    ph.k = resume_k_;
+    restart_file_.reset();
+  }
+  sum_.lipschitz = ph.alg->lipschitz();
+  set_pass_sizes(ph);
+  ph.prev_obj = objective_of(*ph.alg);
+  if (ph.k == 0) {
+    sum_.initial_cost = ph.prev_obj;
+    record_start(ph);
+  }
+}
+
+void Solver::Run::set_pass_sizes(Phase& ph) const {
+  // Auto: every iteration for small runs; about 1000 records per phase for
+  // long ones; at least every 10 iterations on large networks, where a
+  // record (an extra exchange and two reductions) costs about an iteration.
+  std::int64_t every = opt_.history_every;
+  if (every <= 0) {
+    every = opt_.max_iter <= 2000 ? 1 : (opt_.max_iter + 999) / 1000;
+    if (prob_.num_sensors() > 100000) every = std::max<std::int64_t>(every, 10);
+  }
+  // Temporal blocking: passes of up to `block` iterations, ending at every
+  // record and checkpoint iteration (so these see the same iterates); the
+  // automatic record interval becomes a multiple of the pass.
+  ph.block = std::max(1, std::min(opt_.temporal_block, ph.alg->max_levels()));
+  if (opt_.history_every <= 0) every = (every + ph.block - 1) / ph.block * ph.block;
+  ph.every = every;
+}
+
+bool Solver::Run::pass(Phase& ph) {
+  iterate(ph, pass_length(ph));
+  const PassResult r = reduce(ph);
+  if (!r.finite) return stop(ph, TerminationType::kFailure, "non-finite iterate");
+  const bool converged = test_stop(ph, r);
+  if (opt_.check_monotone && ph.info->monotone_surrogate) check_monotone(ph);
+  const bool last = converged || ph.k == opt_.max_iter;
+  if ((ph.k % ph.every == 0 || last) && record(ph, r))
+    return stop(ph, TerminationType::kUserAbort, "stopped by a callback");
+  if (converged) {
+    ph.term = TerminationType::kConvergence;
+    return false;
+  }
+  // Checkpoint only while the phase goes on, so a resume never repeats a stop.
+  if (checkpointing_ && !last && (r.signalled || r.clock || (ckpt_.every > 0 && ph.k % ckpt_.every == 0)))
+    checkpoint(ph);
+  if (r.signalled)
+    return stop(ph, TerminationType::kSignal,
+                checkpointing_ ? "stopped by a signal; checkpoint written to " + ckpt_.path
+                               : "stopped by a signal (no --checkpoint given)");
+  return true;
+}
+
+std::int64_t Solver::Run::pass_length(const Phase& ph) const {
+  std::int64_t n = std::min({ph.block, opt_.max_iter - ph.k, ph.every - ph.k % ph.every});
+  if (checkpointing_ && ckpt_.every > 0) n = std::min(n, ckpt_.every - ph.k % ckpt_.every);
+  return n;
+}
+
+void Solver::Run::iterate(Phase& ph, std::int64_t n) {
+  const double w0 = halo_.wait_seconds(), ti = MPI_Wtime();
+  // A rank-local failure (std::bad_alloc) while the others wait in the
+  // iteration's collectives cannot be agreed on: it aborts every rank.
+  abort_on_local_failure(comm_, "iteration", [&] {
+    for (std::int64_t i = 1; i <= n; ++i) test_fail_point("solve", total_it_ + i);  // fault-injection tests
+    ph.alg->iterate_levels(static_cast<int>(n));
+  });
+  ph.time += MPI_Wtime() - ti;
+  iter_wait_ += halo_.wait_seconds() - w0;
+  ph.k += n;
+  total_it_ += n;
+  for (std::int64_t i = 0; i < n; ++i) {  // summed as one iteration at a time
+    messages_ += ph.alg->messages_per_iteration();
+    reals_ += ph.alg->reals_per_iteration();
+  }
+}
+
+// One reduction per pass: stopping sums, and flags every rank must agree on
+// (a stop signal on any rank; rank 0's checkpoint clock).
+Solver::Run::PassResult Solver::Run::reduce(const Phase& ph) {
+  double loc[5] = {0, 0, 0, 0, 0}, glob[5];
+  ph.alg->change_norms(&loc[0], &loc[1]);
+  loc[2] = ph.alg->grad_norm_sq();
+  if (!std::isfinite(loc[2])) loc[2] = 0;
+  loc[3] = (ckpt_.stop_on_signal && stop_signal_received()) ? 1 : 0;
+  loc[4] = (root_ && checkpointing_ && ckpt_.seconds > 0 && MPI_Wtime() - last_ckpt_ >= ckpt_.seconds) ? 1 : 0;
+  MPI_Allreduce(loc, glob, 3, MPI_DOUBLE, MPI_SUM, comm_);
+  MPI_Allreduce(loc + 3, glob + 3, 2, MPI_DOUBLE, MPI_MAX, comm_);
+  PassResult r;
+  r.rel = glob[1] > 0 ? std::sqrt(glob[0] / glob[1]) : std::sqrt(glob[0]);
+  r.gnorm = std::sqrt(glob[2]);
+  r.finite = std::isfinite(glob[0]) && std::isfinite(glob[1]);
+  r.signalled = glob[3] > 0;
+  r.clock = glob[4] > 0;
+  return r;
+}
+
+bool Solver::Run::test_stop(Phase& ph, const PassResult& r) const {
+  if (opt_.tol > 0 && r.rel <= opt_.tol) {
+    ph.msg = "relative improvement " + std::to_string(r.rel) + " <= tol";
+    return true;
+  }
+  if (opt_.grad_tol > 0 && std::isfinite(ph.alg->grad_norm_sq()) && r.gnorm <= opt_.grad_tol) {
+    ph.msg = "gradient norm " + std::to_string(r.gnorm) + " <= grad_tol";
+    return true;
+  }
+  return false;
+}
+
+void Solver::Run::check_monotone(Phase& ph) {
+  const double f = objective_of(*ph.alg);
+  // Rounding floor: at an exact fit (sigma = 0) F is ~1e-31 and jitters.
+  if (f > ph.prev_obj * (1 + 1e-12) + 1e-24)
+    throw Error("MM surrogate increased at iteration " + std::to_string(ph.k) + ": " + std::to_string(ph.prev_obj) +
+                " -> " + std::to_string(f));
+  ph.prev_obj = f;
+}
+
+void Solver::Run::record_start(const Phase& ph) {
+  IterationSummary it;
+  it.phase = ph.alg->name();
+  it.total_iteration = total_it_;
+  it.cost = ph.prev_obj;
+  it.messages = messages_;
+  it.reals = reals_;
+  it.elapsed = MPI_Wtime() - t0_;
+  metrics_at(ph.alg->positions(), it);
+  sum_.history.push_back(it);
+}
+
+bool Solver::Run::record(const Phase& ph, const PassResult& r) {
+  IterationSummary it;
+  it.phase = ph.alg->name();
+  it.iteration = ph.k;
+  it.total_iteration = total_it_;
+  it.cost = objective_of(*ph.alg);
+  it.rel_change = r.rel;
+  it.grad_norm = std::isfinite(ph.alg->grad_norm_sq()) ? r.gnorm : NAN;
+  it.messages = messages_;
+  it.reals = reals_;
+  it.elapsed = MPI_Wtime() - t0_;
+  metrics_at(ph.alg->positions(), it);
+  sum_.history.push_back(it);
+  bool abort = false;
+  for (auto* cb : s_.callbacks_) abort |= (*cb)(it) == CallbackReturn::kAbort;
+  return abort;
+}
+
+void Solver::Run::checkpoint(const Phase& ph) {
+  CheckpointHeader h;
+  h.network_fingerprint = ckpt_.network_fingerprint;
+  h.options = s_.options_fingerprint();
+  h.algorithm = opt_.algorithm;
+  h.phase = static_cast<std::int64_t>(ph.index);
+  h.phase_algorithm = ph.alg->name();
+  h.phase_iteration = ph.k;
+  h.total_iteration = total_it_;
+  h.messages = messages_;
+  h.reals = reals_;
+  h.elapsed = MPI_Wtime() - t0_;
+  h.ranks = comm_size(comm_);
+  h.num_sensors = prob_.num_sensors();
+  h.dim = p_;
+  write_checkpoint(ckpt_.path, prob_, h, sum_.history, *ph.alg);
+  last_ckpt_ = MPI_Wtime();
+}
+
+bool Solver::Run::stop(Phase& ph, TerminationType t, std::string msg) {
+  ph.term = t;
+  ph.msg = std::move(msg);
+  stop_all_ = true;
+  return false;
+}
+
+// The phase's times and result; x_ takes its final positions (the next phase's start).
+void Solver::Run::end_phase(Phase& ph) {
+  iter_time_ += ph.time;
+  double g = 0;
+  MPI_Allreduce(&ph.time, &g, 1, MPI_DOUBLE, MPI_MAX, comm_);
+  sum_.phase_iterate_seconds.emplace_back(ph.alg->name(), g);
+  if (ph.term == TerminationType::kNoConvergence) ph.msg = "reached --max-iter";
+  const auto& xp = ph.alg->positions();
+  std::copy(xp.begin(), xp.begin() + std::size_t(prob_.num_owned()) * p_, x_.begin());
+  if (ph.info->gap_certificate) {
+    std::copy(x_.begin(), x_.end(), xs_.begin());
+    const std::int64_t b1 = halo_.bytes_sent();
+    halo_.exchange(xs_.data(), p_);
+    instrumentation_bytes_ += halo_.bytes_sent() - b1;
+    const CostTerms c = evaluate_costs(prob_, xs_.data());
+    sum_.gap_certificate = c.certificate;
+    sum_.relaxed_optimum = c.relaxed;
+  }
+  sum_.final_cost = objective_of(*ph.alg);
+  sum_.termination = ph.term;
+  sum_.message = phases_.size() > 1 ? ph.alg->name() + ": " + ph.msg : ph.msg;
+  sum_.converged = ph.term == TerminationType::kConvergence;
+}
+
+// Final metrics at the solution, traffic and times over all ranks.
+Summary Solver::Run::finish(std::vector<double>* x_out) {
+  sum_.iterations = total_it_;
+  std::copy(x_.begin(), x_.end(), xs_.begin());
+  const std::int64_t b0 = halo_.bytes_sent();
+  halo_.exchange(xs_.data(), p_);
+  sum_.costs = evaluate_costs(prob_, xs_.data());
+  sum_.errors = evaluate_errors(prob_, xs_.data());
+  instrumentation_bytes_ += halo_.bytes_sent() - b0;
+  sum_.messages_per_sensor = messages_;
+  sum_.reals_per_sensor = reals_;
+  long long mine = halo_.bytes_sent() - instrumentation_bytes_, all = 0;
+  MPI_Allreduce(&mine, &all, 1, MPI_LONG_LONG, MPI_SUM, comm_);
+  sum_.mpi_bytes = all;
+  sum_.wall_seconds = MPI_Wtime() - t0_;
+  double wf = sum_.wall_seconds > 0 ? halo_.wait_seconds() / sum_.wall_seconds : 0, wfm = 0;
+  MPI_Allreduce(&wf, &wfm, 1, MPI_DOUBLE, MPI_MAX, comm_);
+  sum_.comm_wait_fraction = wfm;
+  double it_loc[2] = {iter_time_, iter_wait_}, it_max[2];
+  MPI_Allreduce(it_loc, it_max, 2, MPI_DOUBLE, MPI_MAX, comm_);
+  sum_.iterate_seconds = it_max[0];
+  sum_.iterate_wait_seconds = it_max[1];
+  if (x_out) *x_out = x_;
+  return std::move(sum_);
+}
+
+void Solver::Run::metrics_at(const std::vector<double>& x, IterationSummary& it) {
+  const std::int64_t b0 = halo_.bytes_sent();
+  std::copy(x.begin(), x.begin() + std::size_t(prob_.num_owned()) * p_, xs_.begin());
+  halo_.exchange(xs_.data(), p_);
+  it.ml_cost = evaluate_costs(prob_, xs_.data()).ml;
+  const ErrorMetrics em = evaluate_errors(prob_, xs_.data());
+  it.rmse = em.rmse;
+  it.mpe = em.mpe;
+  instrumentation_bytes_ += halo_.bytes_sent() - b0;
+}
+
+// The method's objective; its halo exchange is instrumentation, not the method's traffic.
+double Solver::Run::objective_of(Algorithm& alg) {
+  const std::int64_t b0 = halo_.bytes_sent();
+  const double f = alg.objective();
+  instrumentation_bytes_ += halo_.bytes_sent() - b0;
+  return f;
 }
 
 }  // namespace snl

@@ -13,6 +13,14 @@
 
 namespace snl {
 
+/// An option the command cannot honour (e.g. --grad-tol for a method without
+/// a gradient-norm stop): a command-line usage error, exit status kExitUsage.
+class UsageError : public Error {
+ public:
+  using Error::Error;
+};
+constexpr int kExitUsage = 2;
+
 struct GenerateCommand {
   std::string output;
   GenerateOptions options;
@@ -61,15 +69,15 @@ struct ExperimentCommand {
   std::string h5;                 ///< optional HDF5 copy of the per-trial table
   std::vector<double> sigmas = {0.01, 0.05, 0.1};
   int trials = 100;
-  std::vector<std::string> algorithms = {"mm", "bb"};
+  std::vector<std::string> algorithms = {"mm", "bb"};  ///< single-phase names of the registry
   double budget = 20000;          ///< reals per sensor for each refinement method
   double relax_tol = 1e-6;        ///< relaxation stopping rule (003, Sec. V)
   std::int64_t relax_max_iter = 100000;
   std::int64_t points = 200;      ///< trajectory points per run
   int bb_rounds = 20;
-  double reach_rel = 1e-3;
+  double reach_rel = 1e-3;        ///< "reached the best cost" = within this relative margin
   std::string start = "relaxation";  ///< methods start from the relaxation's output, or from random
-  double tol = 0;                 ///< methods' relative-improvement tolerance (0: spend the whole budget)        ///< "reached the best cost" = within this relative margin
+  double tol = 0;                 ///< methods' relative-improvement tolerance (0: spend the whole budget)
   std::uint64_t seed = 1;
   std::string partition = "metis";
   bool quiet = false;

@@ -10,6 +10,7 @@
 
 #include "snl/io/h5file.hpp"
 #include "snl/problem/problem.hpp"
+#include "snl/solvers/history.hpp"
 
 namespace snl {
 
@@ -53,6 +54,34 @@ class StateReader {
   const LocalizationProblem& prob_;
   std::string prefix_;
 };
+
+class Algorithm;
+
+/// The root attributes of a checkpoint file (layout in docs/formats.md):
+/// where the run stands, and what it must match to be resumed.
+struct CheckpointHeader {
+  std::string network_fingerprint;  ///< network_fingerprint() of the input
+  std::string options;              ///< Solver::options_fingerprint()
+  std::string algorithm;            ///< --algorithm
+  std::int64_t phase = 0;           ///< index of the phase in the algorithm's phases
+  std::string phase_algorithm;      ///< that phase's method
+  std::int64_t phase_iteration = 0, total_iteration = 0;
+  double messages = 0, reals = 0;   ///< cumulative per sensor
+  double elapsed = 0;               ///< seconds of the run so far
+  std::int64_t ranks = 0, num_sensors = 0, dim = 0;
+};
+
+/// Collective: writes a checkpoint (header, history, the algorithm's state)
+/// to `path`, atomically replacing it.
+void write_checkpoint(const std::string& path, const LocalizationProblem& prob, const CheckpointHeader& header,
+                      const std::vector<IterationSummary>& history, const Algorithm& alg);
+
+/// Checks that `f` is a checkpoint of the network and options given and
+/// returns its header; throws snl::Error (the same on every rank) otherwise.
+CheckpointHeader read_checkpoint_header(const H5File& f, const std::string& network_fingerprint,
+                                        const std::string& options);
+/// The history a checkpoint holds.
+std::vector<IterationSummary> read_checkpoint_history(const H5File& f);
 
 /// Order-independent 64-bit fingerprint of a network slab's content
 /// (collective: identical for any number of ranks), as 16 hex digits.

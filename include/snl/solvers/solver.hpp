@@ -2,7 +2,8 @@
 // Solver interface in the style of Ceres: an Options struct with in-class
 // defaults and validation, a Summary, iteration callbacks, and a small
 // Algorithm interface that every method (relaxation, MM, BB, ...) implements,
-// so the driver never changes when an algorithm is added.
+// so the driver never changes when an algorithm is added: a method is one .cpp
+// file in src/solvers/ plus one row of the registry (registry.hpp).
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -11,9 +12,11 @@
 #include <utility>
 #include <vector>
 
-#include "snl/solvers/checkpoint.hpp"
 #include "snl/problem/metrics.hpp"
 #include "snl/problem/problem.hpp"
+#include "snl/solvers/checkpoint.hpp"
+#include "snl/solvers/history.hpp"
+#include "snl/solvers/registry.hpp"
 
 namespace snl {
 
@@ -27,7 +30,7 @@ enum class TerminationType {
 const char* to_string(TerminationType t);
 
 struct SolverOptions {
-  /// relaxation | mm | pipeline | bb | pm | async | async-exact
+  /// A name of the registry (registry.hpp): relaxation | mm | pipeline | bb | pm | async | async-exact
   std::string algorithm = "pipeline";
   /// Iterations per phase (the pipeline has two phases).
   std::int64_t max_iter = 10000;
@@ -58,23 +61,12 @@ struct SolverOptions {
   bool check_monotone = true;
 #endif
   std::uint64_t seed = 1;
-  /// "" if valid, else the message.
+  /// "" if valid, else the message (unsupported_option() included).
   std::string validate() const;
-};
-
-/// What an iteration callback (and the history) sees.
-struct IterationSummary {
-  std::string phase;             ///< algorithm of the current phase
-  std::int64_t iteration = 0;    ///< within the phase
-  std::int64_t total_iteration = 0;
-  double cost = NAN;             ///< the cost the phase's algorithm minimizes
-  double ml_cost = NAN;          ///< f(x), comparable across algorithms
-  double rel_change = NAN;       ///< ||x(k)-x(k-1)|| / ||x(k)||
-  double grad_norm = NAN;
-  double rmse = NAN, mpe = NAN;  ///< when truth is known
-  double messages = 0;           ///< cumulative messages per sensor (all phases)
-  double reals = 0;              ///< cumulative reals per sensor (all phases)
-  double elapsed = 0;            ///< seconds since solve() began
+  /// "" unless an option is set to a non-default value that the algorithm
+  /// cannot honour (its capabilities in the registry: --grad-tol,
+  /// --temporal-block, --bb-rounds); then the message saying so.
+  std::string unsupported_option() const;
 };
 
 enum class CallbackReturn { kContinue, kAbort };
@@ -159,22 +151,12 @@ class Algorithm {
   virtual void load(const StateReader& r) = 0;
 };
 
-/// PM and the asynchronous methods (src/alg_sequential.cpp); nullptr for other names.
+/// The methods of the registry that are not synchronous (PM, async, async-exact); nullptr for other names.
 std::unique_ptr<Algorithm> make_sequential_algorithm(const std::string& name, LocalizationProblem& prob,
                                                      const SolverOptions& opt);
-/// Deterministic Jones-Plassmann colouring (priorities hashed from global ids):
+/// Deterministic Jones-Plassmann colouring (priorities hashed from global ids; PM's order, pm.cpp):
 /// a colour per local node (owned and ghost); neighbours never share one.
 std::vector<int> jones_plassmann_coloring(DistGraph& g);
-
-/// Numeric codes of the algorithms in history/checkpoint/experiment files:
-/// 0=relaxation 1=mm 2=bb 3=pm 4=async 5=async-exact (9 for anything else).
-int algorithm_code(const std::string& name);
-const char* algorithm_name(int code);  ///< inverse of algorithm_code ("?" if unknown)
-constexpr const char* kAlgorithmCodes = "0=relaxation 1=mm 2=bb 3=pm 4=async 5=async-exact";
-
-/// Factory: relaxation, mm, bb, pm, async, async-exact. Throws snl::Error for an unknown name.
-std::unique_ptr<Algorithm> make_algorithm(const std::string& name, LocalizationProblem& prob,
-                                          const SolverOptions& opt);
 
 /// Initial point: --init random (uniform in the bounding box of the anchors,
 /// keyed by (seed, global id): the same for any number of ranks). Owned rows.
@@ -206,6 +188,7 @@ class Solver {
   SolverOptions opt_;
   std::vector<IterationCallback*> callbacks_;
   CheckpointConfig ckpt_;
+  class Run;  // one call of solve(), as named steps (solver.cpp)
 };
 
 }  // namespace snl

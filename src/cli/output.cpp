@@ -1,0 +1,88 @@
+// Output files of the subcommands: the path checks made before any work, and
+// atomic writes (a temporary file renamed over the target on success only).
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+
+#include "cli/cli_util.hpp"
+#include "core/json.hpp"
+#include "snl/cli/commands.hpp"
+
+namespace snl {
+
+namespace {
+
+std::string dir_of(const std::string& path) {
+  const auto s = path.find_last_of('/');
+  if (s == std::string::npos) return ".";
+  if (s == 0) return "/";
+  return path.substr(0, s);
+}
+
+}  // namespace
+
+namespace detail {
+
+std::string fmt(double v, int prec) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.*g", prec, v);
+  return b;
+}
+
+void write_text_on_root(const std::string& path, const std::string& text, MPI_Comm comm) {
+  std::string err;
+  if (is_root(comm)) {
+    try {
+      write_text_atomic(path, text);
+    } catch (const std::exception& e) {
+      err = e.what();
+    }
+  }
+  agree(comm, err);
+}
+
+}  // namespace detail
+
+void write_text_atomic(const std::string& path, const std::string& text) {
+  const std::string tmp = path + ".tmp-" + std::to_string(getpid());
+  {
+    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+    if (!f) throw Error(path + ": cannot create file (" + std::strerror(errno) + ")");
+    f << text;
+    f.flush();
+    if (!f) {
+      std::remove(tmp.c_str());
+      throw Error(path + ": write failed (disk full?)");
+    }
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const std::string why = std::strerror(errno);
+    std::remove(tmp.c_str());
+    throw Error(path + ": cannot rename temporary file (" + why + ")");
+  }
+}
+
+void check_output_path(const std::string& path, MPI_Comm comm) {
+  std::string err;
+  if (detail::is_root(comm)) {
+    const std::string d = dir_of(path);
+    if (path.empty())
+      err = "empty output path";
+    else if (access(d.c_str(), F_OK) != 0)
+      err = path + ": directory '" + d + "' does not exist";
+    else if (access(d.c_str(), W_OK) != 0)
+      err = path + ": directory '" + d + "' is not writable";
+    else if (access(path.c_str(), F_OK) == 0 && access(path.c_str(), W_OK) != 0)
+      err = path + ": file exists and is not writable";
+    else if (struct stat st {}; stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode))
+      err = path + (S_ISDIR(st.st_mode) ? ": is a directory"
+                                        : ": exists and is not a regular file (e.g. a device); refusing to replace it");
+  }
+  agree(comm, err);
+}
+
+}  // namespace snl

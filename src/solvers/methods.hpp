@@ -1,0 +1,17 @@
+#pragma once
+// The factories of the methods, one .cpp file each (internal header): the
+// registry (registry.cpp) lists them; nothing else calls them.
+#include <memory>
+
+#include "snl/solvers/solver.hpp"
+
+namespace snl::detail {
+
+std::unique_ptr<Algorithm> make_relaxation(LocalizationProblem& prob, const SolverOptions& opt);  // relaxation.cpp
+std::unique_ptr<Algorithm> make_mm(LocalizationProblem& prob, const SolverOptions& opt);          // mm.cpp
+std::unique_ptr<Algorithm> make_bb(LocalizationProblem& prob, const SolverOptions& opt);          // bb.cpp
+std::unique_ptr<Algorithm> make_pm(LocalizationProblem& prob, const SolverOptions& opt);          // pm.cpp
+std::unique_ptr<Algorithm> make_async(LocalizationProblem& prob, const SolverOptions& opt);       // async.cpp
+std::unique_ptr<Algorithm> make_async_exact(LocalizationProblem& prob, const SolverOptions& opt); // async.cpp
+
+}  // namespace snl::detail

@@ -1,0 +1,113 @@
+#include "snl/solvers/registry.hpp"
+
+#include "snl/solvers/solver.hpp"
+#include "solvers/methods.hpp"
+
+namespace snl {
+
+namespace {
+
+using A = AlgorithmId;
+
+// Capabilities, as the code has them: --temporal-block is honoured where
+// Algorithm::max_levels() > 1 (relaxation, MM); --grad-tol where grad_norm_sq()
+// is finite (relaxation, BB); --bb-rounds by BB alone.
+const std::vector<AlgorithmInfo> kRegistry = {
+    // id             name           code  factory                   phases
+    //   synchronous temporal_blocking gradient_stop consensus_rounds monotone_surrogate gap_certificate
+    {A::kRelaxation, "relaxation", 0, detail::make_relaxation, {A::kRelaxation},
+     true, true, true, false, false, true},
+    {A::kMM, "mm", 1, detail::make_mm, {A::kMM},
+     true, true, false, false, true, false},
+    {A::kPipeline, "pipeline", -1, nullptr, {A::kRelaxation, A::kMM},
+     true, true, true, false, true, true},
+    {A::kBB, "bb", 2, detail::make_bb, {A::kBB},
+     true, false, true, true, false, false},
+    {A::kPM, "pm", 3, detail::make_pm, {A::kPM},
+     false, false, false, false, false, false},
+    {A::kAsync, "async", 4, detail::make_async, {A::kAsync},
+     false, false, false, false, false, false},
+    {A::kAsyncExact, "async-exact", 5, detail::make_async_exact, {A::kAsyncExact},
+     false, false, false, false, false, false},
+};
+
+}  // namespace
+
+const std::vector<AlgorithmInfo>& algorithm_registry() { return kRegistry; }
+
+const AlgorithmInfo* find_algorithm(const std::string& name) {
+  for (const auto& a : kRegistry)
+    if (name == a.name) return &a;
+  return nullptr;
+}
+
+const AlgorithmInfo& algorithm_info(AlgorithmId id) {
+  for (const auto& a : kRegistry)
+    if (a.id == id) return a;
+  throw Error("algorithm id not in the registry");
+}
+
+std::string algorithm_names(const std::string& sep, const std::string& last_sep, bool single_phase_only) {
+  std::vector<const char*> names;
+  for (const auto& a : kRegistry)
+    if (!single_phase_only || a.phases.size() == 1) names.push_back(a.name);
+  std::string out;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    if (i > 0) out += (i + 1 == names.size() && !last_sep.empty()) ? last_sep : sep;
+    out += names[i];
+  }
+  return out;
+}
+
+std::string algorithms_with(bool AlgorithmInfo::*capability) {
+  std::string out;
+  for (const auto& a : kRegistry)
+    if (a.*capability) out += std::string(out.empty() ? "" : ", ") + a.name;
+  return out;
+}
+
+int algorithm_code(const std::string& name) {
+  const AlgorithmInfo* a = find_algorithm(name);
+  return a && a->code >= 0 ? a->code : 9;
+}
+
+namespace {
+const AlgorithmInfo* find_code(int code) {
+  for (const auto& a : kRegistry)
+    if (code >= 0 && a.code == code) return &a;
+  return nullptr;
+}
+}  // namespace
+
+const char* algorithm_name(int code) {
+  const AlgorithmInfo* a = find_code(code);
+  return a ? a->name : "?";
+}
+
+std::string algorithm_codes_legend() {  // codes are 0, 1, 2, ... without gaps
+  std::string out;
+  for (int c = 0; find_code(c); ++c) out += (c > 0 ? " " : "") + std::to_string(c) + "=" + find_code(c)->name;
+  return out;
+}
+
+std::unique_ptr<Algorithm> make_algorithm(AlgorithmId id, LocalizationProblem& prob, const SolverOptions& opt) {
+  const AlgorithmInfo& a = algorithm_info(id);
+  if (!a.make) throw Error(std::string("'") + a.name + "' is not a single method (the Solver runs its phases)");
+  return a.make(prob, opt);
+}
+
+std::unique_ptr<Algorithm> make_algorithm(const std::string& name, LocalizationProblem& prob,
+                                          const SolverOptions& opt) {
+  const AlgorithmInfo* a = find_algorithm(name);
+  if (!a || !a->make) throw Error("unknown algorithm '" + name + "'");
+  return a->make(prob, opt);
+}
+
+std::unique_ptr<Algorithm> make_sequential_algorithm(const std::string& name, LocalizationProblem& prob,
+                                                     const SolverOptions& opt) {
+  const AlgorithmInfo* a = find_algorithm(name);
+  if (!a || a->synchronous || !a->make) return nullptr;
+  return a->make(prob, opt);
+}
+
+}  // namespace snl

@@ -1,0 +1,147 @@
+// Disk relaxation by Nesterov's method (003, Algorithm 1). Every node sums its
+// neighbours in global-id order, so iterates are bit-identical for any number
+// of ranks. Each iteration: halo begin -> interior nodes -> halo end -> boundary;
+// with temporal blocking, several iterations per pass over memory (kernels.hpp).
+#include <algorithm>
+#include <cmath>
+
+#include "kernels/kernels.hpp"
+#include "snl/problem/metrics.hpp"
+#include "solvers/algorithm_util.hpp"
+#include "solvers/methods.hpp"
+
+namespace snl {
+
+namespace {
+
+using detail::with_ghost_rows;
+
+// Disk relaxation, Nesterov's method (003, Algorithm 1):
+//   w = x(k-1) + (k-2)/(k+1) (x(k-1) - x(k-2)),   x(k) = w - grad f_hat(w) / L.
+class Relaxation final : public Algorithm {
+ public:
+  Relaxation(LocalizationProblem& prob, int levels) : prob_(prob), L_(relaxation_lipschitz(prob)), levels_(levels) {}
+  std::string name() const override { return algorithm_info(AlgorithmId::kRelaxation).name; }
+  double lipschitz() const override { return L_; }
+  double reals_per_iteration() const override { return prob_.dim(); }
+
+  void start(const std::vector<double>& x0) override {
+    x_ = with_ghost_rows(prob_, x0);
+    prev_ = x_;  // x(-1) = x(0)
+    w_.assign(x_.size(), 0.0);
+    w_next_.assign(x_.size(), 0.0);
+    w_ready_ = false;
+    lanes_.build(prob_);
+    plan_.build(prob_, lanes_, levels_);
+    norms_.assign(std::size_t(levels_) * 3 * detail::kMaxLanes, 0.0);
+    stream_ = detail::stream_rows(4 * sizeof(double) * x_.size());
+    k_ = 0;
+  }
+
+  void iterate() override { iterate_levels(1); }
+  int max_levels() const override { return levels_; }
+
+  // n iterations in one pass over the owned nodes, in chunks of SIMD lanes
+  // (kernels.hpp, detail::run_levels): per node and level, the gradient at w,
+  // x(k) = w - g/L, the norms of the stopping tests and next iteration's
+  // extrapolation point (one read of w and x(k-1), one write of x(k) and
+  // w(k+1)). Level j reads w from w_ / w_next_ and x(k-1) from x_ / prev_
+  // alternately (j even / odd) and writes the other. The norms of the last
+  // level are summed per lane, then over the lanes in lane order.
+  void iterate_levels(int n) override {
+    const int p = prob_.dim();
+    const LocalId n_owned = prob_.num_owned();
+    if (!w_ready_) {  // first iteration or after a restart
+      const double beta = static_cast<double>(k_ - 1) / static_cast<double>(k_ + 2);
+      const std::size_t m = std::size_t(n_owned) * p;
+      for (std::size_t t = 0; t < m; ++t) w_[t] = x_[t] + beta * (x_[t] - prev_[t]);
+    }
+    std::fill(norms_.begin(), norms_.end(), 0.0);
+    double* const w[2] = {w_.data(), w_next_.data()};
+    double* const x[2] = {x_.data(), prev_.data()};
+    const std::int64_t k0 = k_;
+    detail::run_levels(plan_, lanes_, n, prob_.graph().halo(), w, p, [&](int j, std::int64_t c0, std::int64_t c1) {
+      const std::int64_t k = k0 + j + 1;  // the iteration this level computes
+      const double beta_next = static_cast<double>(k - 1) / static_cast<double>(k + 2);
+      // g = grad f_hat(w) (003, Alg. 1 steps 7-8); x(k) = w - g/L goes over
+      // x(k-2), which is no longer needed; w(k+1) = x(k) + beta_next (x(k) - x(k-1)).
+      detail::relax_chunks(prob_, lanes_, c0, c1,
+                           {w[j & 1], x[j & 1], x[(j + 1) & 1], w[(j + 1) & 1], L_, beta_next,
+                            &norms_[std::size_t(j) * 3 * detail::kMaxLanes], stream_ && j == n - 1});
+    });
+    k_ += n;
+    double sums[3];
+    detail::sum_lanes(&norms_[std::size_t(n - 1) * 3 * detail::kMaxLanes], lanes_.lanes, 3, sums);
+    diff_sq_ = sums[0];
+    x_sq_ = sums[1];
+    gsq_ = sums[2];
+    if (n % 2 == 1) {
+      std::swap(x_, prev_);  // x <- x(k), prev <- x(k-1)
+      std::swap(w_, w_next_);
+    }
+    w_ready_ = true;
+  }
+
+  const std::vector<double>& positions() const override { return x_; }
+  std::int64_t memory_bytes() const override {
+    return static_cast<std::int64_t>(sizeof(double) * (x_.capacity() + prev_.capacity() + w_.capacity() +
+                                                       w_next_.capacity() + norms_.capacity())) +
+           lanes_.bytes() + plan_.bytes();
+  }
+  // Per owned node: offsets and anchor offsets 16, w rows 8p (own and
+  // neighbours' once, ghosts included), x(k-1) read, x(k) and w(k+1) written
+  // 24p; per slot: adjacency 4 and range 8; per anchor pair: id 4, range 8.
+  // A pass of S > 1 levels moves all that once (the levels reuse it from
+  // cache) but leaves all four row arrays written: 40p instead of 24p.
+  double traffic_bytes_per_iteration() const override {
+    const double p = prob_.dim(), n = prob_.num_owned(), g = prob_.num_local() - prob_.num_owned();
+    const double D = double(prob_.graph().adjacency().size()), A = double(prob_.anchor_ranges().size());
+    const double rows = (levels_ == 1 ? 24 : 40) * p * n;
+    return (16 * n + 8 * p * (n + g) + rows + 12 * D + 12 * A) / levels_;
+  }
+  double objective() override {
+    prob_.graph().halo().exchange(x_.data(), prob_.dim());
+    return evaluate_costs(prob_, x_.data()).relaxed;
+  }
+  void change_norms(double* d, double* s) const override {
+    *d = diff_sq_;
+    *s = x_sq_;
+  }
+  double grad_norm_sq() const override { return gsq_; }
+  void save(StateWriter& w) const override {
+    w.scalar("k", double(k_));
+    w.node_rows("x", x_.data(), prob_.dim());
+    w.node_rows("x_prev", prev_.data(), prob_.dim());
+  }
+  void load(const StateReader& r) override {
+    k_ = static_cast<std::int64_t>(r.scalar("k"));
+    r.node_rows("x", x_.data(), prob_.dim());
+    r.node_rows("x_prev", prev_.data(), prob_.dim());
+    w_ready_ = false;
+  }
+
+ private:
+  LocalizationProblem& prob_;
+  double L_;
+  std::vector<double> x_, prev_, w_, w_next_;
+  detail::NodeLanes lanes_;
+  int levels_;                 // iterations per pass at most (SolverOptions::temporal_block)
+  detail::LevelPlan plan_;
+  std::vector<double> norms_;  // per level and lane: ||x(k) - x(k-1)||^2, ||x(k)||^2, ||g||^2
+  bool stream_ = false;        // non-temporal row stores (kernels.hpp)
+  bool w_ready_ = false;
+  std::int64_t k_ = 0;
+  double diff_sq_ = 0, x_sq_ = 0, gsq_ = 0;
+};
+
+}  // namespace
+
+namespace detail {
+
+std::unique_ptr<Algorithm> make_relaxation(LocalizationProblem& prob, const SolverOptions& opt) {
+  return std::make_unique<Relaxation>(prob, opt.temporal_block);
+}
+
+}  // namespace detail
+
+}  // namespace snl
