@@ -1,5 +1,6 @@
-// 003 Algorithm 2 with the spec's corrected local problem (weight 1/2, L_i =
-// delta_i + |A_i|): no activation increases f_hat, exact or inexact (eq. 20).
+// The async method (src/solvers/alg_sequential.cpp), serially: 003 Algorithm 2
+// with the spec's corrected local problem (weight 1/2, L_i = delta_i + |A_i|):
+// no activation increases f_hat, exact or inexact (eq. 20).
 #include <gtest/gtest.h>
 
 #include "reference/reference.hpp"
