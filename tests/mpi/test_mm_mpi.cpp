@@ -23,6 +23,7 @@ TEST(MM, MatchesSerialReferenceAndSurrogateNeverIncreases) {
   const auto x0 = allgather_positions(prob, random_initial_positions(prob, 3));
   std::vector<double> F;
   const auto xr = reference::mm(w, x0, 50, &F);
+  ASSERT_EQ(x.size(), xr.size());
   for (std::size_t t = 0; t < x.size(); ++t) EXPECT_NEAR(x[t], xr[t], 1e-12) << t;
   for (std::size_t t = 1; t < F.size(); ++t) EXPECT_LE(F[t], F[t - 1] * (1 + 1e-14)) << t;
   EXPECT_LE(reference::ml_cost(w, xr), F.back() * (1 + 1e-12));  // f(x) <= F(z)

@@ -31,11 +31,13 @@ TEST(SequentialMethods, PMAndAsyncMatchTheirOneAtATimeReference) {
   }
   const auto xp = run(MPI_COMM_WORLD, w, "pm", 25);
   const auto xpr = reference::pm(w, x0, 25);
+  ASSERT_EQ(xp.size(), xpr.size());
   for (std::size_t t = 0; t < xp.size(); ++t) EXPECT_NEAR(xp[t], xpr[t], 1e-12) << t;
   for (bool exact : {false, true}) {
     const auto xa = run(MPI_COMM_WORLD, w, exact ? "async-exact" : "async", 6);
     // SolverOptions::seed (1 by default) keys the activation sequence.
     const auto xar = reference::async(w, x0, 6 * w.num_sensors, 1, exact);
+    ASSERT_EQ(xa.size(), xar.size());
     for (std::size_t t = 0; t < xa.size(); ++t) EXPECT_NEAR(xa[t], xar[t], 1e-10) << t << (exact ? " exact" : "");
   }
 }
