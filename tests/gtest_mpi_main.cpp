@@ -1,12 +1,17 @@
 // GoogleTest main for snl: initialises MPI, runs the tests on every rank, and
 // makes every rank report its own failures (prefixed by the rank); rank 0 prints
-// the usual progress. The exit status is non-zero if any rank failed.
+// the usual progress. The exit status is non-zero if any rank failed, and
+// kSkipped (ctest's SKIP_RETURN_CODE) if none failed but a test was skipped
+// on some rank (GTEST_SKIP: it could not run here), so that ctest reports the
+// file as skipped rather than passed.
 #include <gtest/gtest.h>
 #include <mpi.h>
 
 #include <cstdio>
 
 namespace {
+
+constexpr int kSkipped = 77;
 
 class RankFailurePrinter : public testing::EmptyTestEventListener {
  public:
@@ -32,9 +37,9 @@ int main(int argc, char** argv) {
   auto& listeners = testing::UnitTest::GetInstance()->listeners();
   if (rank != 0) delete listeners.Release(listeners.default_result_printer());
   listeners.Append(new RankFailurePrinter(rank));
-  const int local = RUN_ALL_TESTS();
-  int global = 0;
-  MPI_Allreduce(&local, &global, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+  int status[2] = {RUN_ALL_TESTS(), testing::UnitTest::GetInstance()->skipped_test_count() > 0 ? 1 : 0};
+  MPI_Allreduce(MPI_IN_PLACE, status, 2, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
   MPI_Finalize();
-  return global;
+  if (status[0] != 0) return status[0];
+  return status[1] ? kSkipped : 0;
 }

@@ -96,12 +96,14 @@ TEST(Generate, ShapesAndConventions) {
 
 class DegreeTest : public testing::TestWithParam<std::tuple<int, int, double>> {};
 
-TEST_P(DegreeTest, AchievedWithinFivePercent) {
+// The README's promise: the requested average degree exactly, +-1 edge
+// (E = round(deg n / 2), up to a tie at the radius).
+TEST_P(DegreeTest, AchievedWithinOneEdge) {
   const auto [n, dim, deg] = GetParam();
   GenerateReport rep;
   const Network net = snl::generate_network(opts(n, dim, deg), &rep);
   const double achieved = 2.0 * static_cast<double>(net.local_sensor_edges()) / n;
-  EXPECT_NEAR(achieved, deg, 0.05 * deg) << "n=" << n << " p=" << dim;
+  EXPECT_LE(std::abs(net.local_sensor_edges() - std::llround(deg * n / 2)), 1) << "n=" << n << " p=" << dim;
   EXPECT_DOUBLE_EQ(achieved, rep.achieved_avg_degree);
   // Every edge lies within the reported radius, and the anchor radius defaults to it.
   const double r2 = rep.radius * rep.radius;
@@ -259,15 +261,15 @@ TEST(Generate, PaperNetworksLocalizable) {
     o.localizable = Loc::kYes;
     GenerateReport rep;
     const Network net = snl::generate_network(o, &rep);
-    EXPECT_GE(rep.draws, 1);
+    EXPECT_GT(rep.draws, 1) << "the first draw was localizable: the redraw seed below is not tested";
     EXPECT_TRUE(rep.localizability.localizable());
     EXPECT_TRUE(rep.localizability.rigidity_checked);
     const auto again = snl::analyze_localizability(net, true);
     EXPECT_TRUE(again.localizable()) << again.summary();
     for (auto f : net.localizability) EXPECT_EQ(f, 0);
-    EXPECT_NEAR(rep.achieved_avg_degree, deg, 0.05 * deg);
+    EXPECT_LE(std::abs(net.local_sensor_edges() - std::llround(deg * n / 2)), 1);  // +-1 edge
     // The returned network is draw number rep.draws, reproducible from its seed.
-    if (rep.draws > 1) EXPECT_EQ(rep.draw_seed, snl::random_bits(42, snl::RngStream::kRedraw, rep.draws - 1));
+    EXPECT_EQ(rep.draw_seed, snl::random_bits(42, snl::RngStream::kRedraw, rep.draws - 1));
     auto o2 = o;
     o2.seed = rep.draw_seed;
     o2.localizable = Loc::kNo;

@@ -1,5 +1,6 @@
-// write_network / read_network_serial round trips, and one test per kind of
-// broken file (each must give a clear snl::Error naming the dataset and row).
+// Network files (src/io/network_io.cpp): write_network / read_network_serial
+// round trips, one test per kind of broken file (each must give a clear
+// snl::Error naming the dataset and row), and failed writes.
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -10,16 +11,15 @@
 #include <limits>
 #include <map>
 
+#include "io_helpers.hpp"
 #include "snl/io/h5file.hpp"
 #include "snl/io/network.hpp"
-#include "snl/io/result_io.hpp"
-#include "test_util.hpp"
 
 using namespace snl;
+using snl::test::read_error;
+using snl::test::scratch;
 
 namespace {
-
-std::string scratch(const std::string& name) { return test::scratch_dir(MPI_COMM_SELF) + "/" + name; }
 
 Network sample(GlobalId n = 6, int dim = 2) {
   Network net;
@@ -55,21 +55,6 @@ void expect_same(const Network& a, const Network& b) {
   EXPECT_EQ(a.sigma, b.sigma);
   EXPECT_EQ(a.localizability, b.localizability);
 }
-
-std::string read_error(const std::string& path) {
-  try {
-    read_network_serial(path);
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
-
-#define EXPECT_CONTAINS(text, fragment)                                                        \
-  do {                                                                                         \
-    const std::string t_ = (text);                                                             \
-    EXPECT_NE(t_.find(fragment), std::string::npos) << "message: '" << t_ << "'";              \
-  } while (0)
 
 using Override = std::function<void(H5File&)>;
 
@@ -420,122 +405,4 @@ TEST(NetworkIoWrite, FailedWriteKeepsExistingFile) {
   EXPECT_EQ(read_network_serial(path).num_sensors, 4);
   const std::string cmd = "ls '" + test::scratch_dir(MPI_COMM_SELF) + "' | grep -q 'keep.h5.tmp'";
   EXPECT_NE(std::system(cmd.c_str()), 0) << "temporary file left behind";
-}
-
-// ---------------------------------------------------------------- H5File details
-
-TEST(H5FileTest, AttributesAndMissing) {
-  const std::string path = scratch("attrs.h5");
-  {
-    H5File f(path, MPI_COMM_SELF, H5File::Mode::kCreate);
-    f.set_attr("s", std::string("héllo"));
-    f.set_attr("i", std::int64_t{-42});
-    f.set_attr("d", 2.5);
-    f.set_attr("grp/sub", std::int64_t{7});
-    f.set_attr("s", std::string("replaced"));
-    f.commit();
-  }
-  H5File f(path, MPI_COMM_SELF, H5File::Mode::kRead);
-  EXPECT_EQ(f.attr_string("s"), "replaced");
-  EXPECT_EQ(f.attr_int("i"), -42);
-  EXPECT_EQ(f.attr_double("d"), 2.5);
-  EXPECT_EQ(f.attr_double("i"), -42.0);
-  EXPECT_EQ(f.attr_int("grp/sub"), 7);
-  EXPECT_TRUE(f.has_attr("grp/sub"));
-  EXPECT_FALSE(f.has_attr("nope"));
-  EXPECT_FALSE(f.has_attr("nogroup/nope"));
-  EXPECT_FALSE(f.has_dataset("grp"));
-  try {
-    f.attr_int("nope");
-    FAIL();
-  } catch (const Error& e) {
-    EXPECT_EQ(std::string(e.what()), path + ": attribute 'nope' not found");
-  }
-  EXPECT_THROW(f.attr_int("d"), Error);  // 2.5 is not an integer
-  EXPECT_THROW(f.attr_string("i"), Error);
-  EXPECT_THROW(f.read_rows_double("nope", 0, 0), Error);
-  EXPECT_THROW(f.set_attr("x", std::int64_t{1}), Error);  // read-only
-}
-
-TEST(H5FileTest, RowsAndScalar) {
-  const std::string path = scratch("rows.h5");
-  std::vector<double> d(20);
-  for (int k = 0; k < 20; ++k) d[k] = k * 0.5;
-  std::vector<std::uint8_t> u = {1, 2, 255};
-  {
-    H5File f(path, MPI_COMM_SELF, H5File::Mode::kCreate);
-    f.write_rows("a/b/d", 10, 2, 0, d.data(), 4);  // two slabs of one dataset
-    f.write_rows("a/b/d", 10, 2, 4, d.data() + 8, 6);
-    f.write_rows("u", 3, 0, 0, u.data(), 3);
-    f.write_scalar("s", 3.25);
-    f.write_replicated("r", std::vector<std::int64_t>{5, 6});
-    f.commit();
-  }
-  H5File f(path, MPI_COMM_SELF, H5File::Mode::kRead);
-  EXPECT_EQ(f.shape("a/b/d"), (std::vector<std::uint64_t>{10, 2}));
-  EXPECT_EQ(f.shape("s"), (std::vector<std::uint64_t>{}));
-  EXPECT_EQ(f.read_rows_double("a/b/d", 0, 10), d);
-  EXPECT_EQ(f.read_rows_double("a/b/d", 3, 2), (std::vector<double>{3, 3.5, 4, 4.5}));
-  EXPECT_EQ(f.read_rows_u8("u", 0, 3), u);
-  EXPECT_EQ(f.read_rows_int("r", 1, 1), (std::vector<std::int64_t>{6}));
-  EXPECT_EQ(f.read_scalar("s"), 3.25);
-  EXPECT_TRUE(f.read_rows_double("a/b/d", 10, 0).empty());
-  EXPECT_THROW(f.read_rows_double("a/b/d", 8, 3), Error);  // beyond the end
-  EXPECT_EQ(f.list("a"), (std::vector<std::string>{"b"}));
-}
-
-// ---------------------------------------------------------------- result files
-
-TEST(ResultIo, SerialRoundTrip) {
-  const std::string path = scratch("result.h5");
-  ResultFile r;
-  r.algorithm = "mm";
-  r.iterations = 17;
-  r.converged = true;
-  r.dim = 3;
-  r.num_sensors = 4;
-  for (int k = 0; k < 12; ++k) r.positions.push_back(k * 0.125);
-  r.history = {{"iteration", {0, 1, 2}}, {"cost", {3, 2, 1}}, {"communications", {1, 2, 3}}};
-  r.double_attrs = {{"tol", 1e-6}};
-  r.string_attrs = {{"network", "net.h5"}};
-  write_result(path, MPI_COMM_SELF, r);
-  const ResultFile b = read_result_serial(path);
-  EXPECT_EQ(b.algorithm, "mm");
-  EXPECT_EQ(b.iterations, 17);
-  EXPECT_TRUE(b.converged);
-  EXPECT_EQ(b.dim, 3);
-  EXPECT_EQ(b.num_sensors, 4);
-  EXPECT_EQ(b.positions, r.positions);
-  ASSERT_EQ(b.history.size(), 3u);  // sorted by name
-  EXPECT_EQ(b.history[0].first, "communications");
-  EXPECT_EQ(b.history[1].first, "cost");
-  EXPECT_EQ(b.history[1].second, (std::vector<double>{3, 2, 1}));
-  EXPECT_EQ(b.double_attrs, r.double_attrs);
-  EXPECT_EQ(b.string_attrs, r.string_attrs);
-  // Reading the result as a network fails clearly.
-  EXPECT_CONTAINS(read_error(path), "attribute 'format' is 'snl-result', expected 'snl-network'");
-}
-
-TEST(ResultIo, ReadPositionsChecks) {
-  const std::string path = scratch("pos.h5");
-  ResultFile r;
-  r.algorithm = "x";
-  r.dim = 2;
-  r.num_sensors = 3;
-  r.positions = {0, 1, 2, 3, 4, std::numeric_limits<double>::quiet_NaN()};
-  write_result(path, MPI_COMM_SELF, r);
-  EXPECT_EQ(read_positions(path, MPI_COMM_SELF, 3, 2, 0, 2), (std::vector<double>{0, 1, 2, 3}));
-  try {
-    read_positions(path, MPI_COMM_SELF, 3, 2, 0, 3);
-    FAIL();
-  } catch (const Error& e) {
-    EXPECT_CONTAINS(e.what(), "positions row 2 is not finite");
-  }
-  try {
-    read_positions(path, MPI_COMM_SELF, 4, 2, 0, 4);
-    FAIL();
-  } catch (const Error& e) {
-    EXPECT_CONTAINS(e.what(), "dataset 'positions' has shape [3, 2], expected [4, 2]");
-  }
-  EXPECT_THROW(read_positions(scratch("nothere.h5"), MPI_COMM_SELF, 3, 2, 0, 3), Error);
 }

@@ -1,0 +1,100 @@
+// The solver driver (src/solvers/solver.cpp): bit-identical positions of every
+// algorithm for 1, 2 and 3 ranks (sub-communicators of this run), metis and
+// block partitions, SIMD and scalar kernels; the stopping rule and history;
+// option validation.
+#include <gtest/gtest.h>
+#include <mpi.h>
+
+#include <cstring>
+
+#include "kernels/kernels.hpp"
+#include "solve_helpers.hpp"
+
+using namespace snl;
+using snl::test::allgather_positions;
+using snl::test::make_network;
+using snl::test::merged;
+using snl::test::NetSpec;
+using snl::test::run;
+using snl::test::slab_of;
+using snl::test::world_rank;
+using snl::test::world_size;
+
+TEST(Determinism, BitIdenticalForOneTwoThreeRanks) {
+  const Network w = make_network({.n = 120, .dim = 2, .radius = 0.2, .anchor_radius = 0.3, .sigma = 0.05});
+  for (const char* alg : {"relaxation", "mm", "bb", "pipeline", "pm", "async", "async-exact"}) {
+    for (PartitionMethod pm : {PartitionMethod::kMetis, PartitionMethod::kBlock}) {
+      const auto ref = run(MPI_COMM_SELF, w, alg, 40, pm);
+      {  // the portable scalar kernels give the same bits as the SIMD ones
+        const bool had = detail::set_simd_enabled(false);
+        const auto scalar = run(MPI_COMM_SELF, w, alg, 40, pm);
+        detail::set_simd_enabled(had);
+        EXPECT_EQ(0, std::memcmp(scalar.data(), ref.data(), ref.size() * sizeof(double)))
+            << alg << ": scalar kernels differ from SIMD";
+      }
+      for (int k = 2; k <= world_size(); ++k) {
+        MPI_Comm sub;
+        MPI_Comm_split(MPI_COMM_WORLD, world_rank() < k ? 0 : MPI_UNDEFINED, world_rank(), &sub);
+        if (sub == MPI_COMM_NULL) continue;
+        const auto x = run(sub, w, alg, 40, pm);
+        ASSERT_EQ(x.size(), ref.size());
+        EXPECT_EQ(0, std::memcmp(x.data(), ref.data(), x.size() * sizeof(double)))
+            << alg << " differs on " << k << " ranks";
+        MPI_Comm_free(&sub);
+      }
+    }
+  }
+}
+
+TEST(Solver, StopsOnRelativeImprovementAndRecordsHistory) {
+  const Network w = make_network({.n = 50, .dim = 2, .radius = 0.3, .anchor_radius = 0.3, .sigma = 0.01});
+  LocalizationProblem prob(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kMetis, nullptr);
+  SolverOptions opt;
+  opt.algorithm = "pipeline";
+  opt.max_iter = 100000;
+  opt.tol = 1e-6;
+  opt.history_every = 1;  // every iteration's rel_change on record
+  Solver solver(prob, opt);
+  const Summary s = solver.solve(random_initial_positions(prob, 1), nullptr);
+  EXPECT_EQ(s.termination, TerminationType::kConvergence);
+  ASSERT_GE(s.history.size(), 3u);
+  // Each phase stops at its first iteration with rel_change <= tol, well
+  // before max_iter; the phases' iterations add up to the total.
+  std::int64_t total = 0, missed = 0;
+  for (std::size_t t = 0; t < s.history.size(); ++t) {
+    const IterationSummary& h = s.history[t];
+    if (h.iteration == 0) continue;  // a phase's starting point (rel_change NaN)
+    if (t + 1 == s.history.size() || s.history[t + 1].iteration == 0) {
+      EXPECT_LE(h.rel_change, opt.tol) << h.phase;
+      EXPECT_LT(h.iteration, opt.max_iter) << h.phase;
+      total += h.iteration;
+    } else {
+      missed += h.rel_change <= opt.tol;  // the phase should have stopped here
+    }
+  }
+  EXPECT_EQ(missed, 0) << "iterations that met the stopping rule without stopping";
+  EXPECT_EQ(s.iterations, total);
+  EXPECT_EQ(s.history.front().phase, "relaxation");
+  EXPECT_EQ(s.history.back().phase, "mm");
+  for (std::size_t t = 1; t < s.history.size(); ++t) EXPECT_GE(s.history[t].reals, s.history[t - 1].reals);
+  EXPECT_DOUBLE_EQ(s.reals_per_sensor, 2.0 * s.iterations);
+  // MM refines the relaxation: the ML cost does not go up in the MM phase.
+  double ml_relax = 0;
+  for (const auto& h : s.history)
+    if (h.phase == "relaxation") ml_relax = h.ml_cost;
+  EXPECT_LE(s.costs.ml, ml_relax * (1 + 1e-12));
+  EXPECT_TRUE(s.errors.valid);
+  EXPECT_LT(s.errors.rmse, 0.05);
+}
+
+TEST(Solver, RejectsBadOptions) {
+  SolverOptions o;
+  o.algorithm = "nope";
+  EXPECT_NE(o.validate(), "");
+  o.algorithm = "mm";
+  o.tol = -1;
+  EXPECT_NE(o.validate(), "");
+  o.tol = 0;
+  o.max_iter = -5;
+  EXPECT_NE(o.validate(), "");
+}
