@@ -8,7 +8,7 @@
 #   slurm_down        cancel our jobs, stop our daemons (safe to call twice)
 #   slurm_logs        print the tails of the daemons' logs (for failures)
 # Settings that differ from a production Slurm, all to keep the test short:
-#   cred_expire=10    a requeued job may start again after 10 s (default 120 s)
+#   cred_expire=5     a requeued job may start again after 5 s (default 120 s)
 #   sched_interval=1  pending jobs are considered every second (default 60 s)
 #   KillWait=5        5 s from SIGTERM to SIGKILL at the time limit (default 30 s)
 
@@ -46,7 +46,7 @@ SlurmctldPort=$ctld_port
 SlurmdPort=$slurmd_port
 AuthType=auth/munge
 CredType=cred/munge
-AuthInfo=socket=$dir/munge/socket,cred_expire=10
+AuthInfo=socket=$dir/munge/socket,cred_expire=5
 SlurmUser=root
 SlurmdUser=root
 ProctrackType=proctrack/linuxproc

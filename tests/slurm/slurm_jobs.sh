@@ -2,7 +2,7 @@
 # The batch scripts of jobs/ under a real (private, one-node) Slurm:
 #  a) jobs/solve.sbatch on 2 tasks (mpirun inside the allocation, and srun
 #     --mpi=pmix) gives the positions of a direct mpirun -np 2 snl solve;
-#  b) a job with --time=1 --signal=B:USR1@50 on a solve that needs about
+#  b) a job with --time=1 --signal=B:USR1@55 on a solve that needs about
 #     WORK_SECONDS (default 50) is signalled before its time limit, checkpoints,
 #     requeues itself and resumes (maybe several times) until it finishes with
 #     the positions of an uninterrupted run; every resumed run starts at the
@@ -40,7 +40,8 @@ fi
 step "private Slurm up: $(sinfo -h -o '%P %D %c %t') (SLURM_CONF=$SLURM_CONF)"
 cd "$T"
 
-# Submit a job and wait for it (at most LIMIT seconds); prints its id.
+# Submit a job and wait for it (at most LIMIT seconds); prints its id. Runs in
+# $(...): callers add "|| exit 1" so that a failure here ends the test.
 submit_wait() {
   local limit=$1 out
   shift
@@ -59,7 +60,7 @@ mpirun -np 2 "$SNL" solve "$NET" -o direct.h5 --algorithm pipeline --max-iter 30
 for launcher in mpirun srun; do
   id=$(submit_wait 120 --ntasks=2 --time=5 -o "a_$launcher.log" \
     --export=ALL,SNL="$SNL",NET="$NET",OUT="$T/a_$launcher.h5",MAXITER=3000,TOL=1e-6,LAUNCHER=$launcher \
-    "$SRC/jobs/solve.sbatch")
+    "$SRC/jobs/solve.sbatch") || exit 1
   [ "$(job_field "$id" JobState)" = COMPLETED ] || fail "solve job ($launcher) state $(job_field "$id" JobState)"
   [ -f "a_$launcher.ckpt.h5" ] || true  # --checkpoint-seconds 600: none for a short run
   same_positions direct.h5 "a_$launcher.h5" "solve.sbatch with $launcher"
@@ -69,7 +70,7 @@ done
 # ---- c) the Monte Carlo array and its merge.
 id=$(submit_wait 120 --array=0-2 -o 'mc_%a.log' \
   --export=ALL,SNL="$SNL",NET="$SRC/inputs/net10_s0.05.h5",DIR="$T/mc",SIGMAS="0.01 0.05",TRIALS=2,SEED0=40,EXTRA="--budget 2000" \
-  "$SRC/jobs/experiment_array.sbatch")
+  "$SRC/jobs/experiment_array.sbatch") || exit 1
 for task in 0 1 2; do
   f=mc/task-$task.seed-$((40 + task)).csv
   [ -f "$f" ] || fail "array task $task wrote no $f"
@@ -95,44 +96,66 @@ PY
 step "c) experiment_array.sbatch: 3 tasks == direct runs with their seeds; merge checked"
 
 # ---- b) time limit: signal, checkpoint, requeue, resume.
-# Size the run from a short calibration so that it needs about WORK_SECONDS
-# here: Slurm tests time limits every 30 s, so --signal=B:USR1@50 with
-# --time=1 arrives 10-40 s into every run, always before a 50 s solve ends.
+# Slurm tests time limits every 30 s, so --time=1 --signal=B:USR1@55 reaches
+# the batch shell 5-35 s into every run: a solve that needs about WORK_SECONDS
+# (default 50; sized by a short calibration run) is always stopped at least
+# once. Should the machine speed up enough for the job to end unsignalled, the
+# run is repeated once with twice the work.
 WORK=${WORK_SECONDS:-50}
 mpirun -np 2 "$SNL" solve "$NET" -o cal.h5 --algorithm pipeline --max-iter 10000 --tol 0 --json cal.json -q
-MAXITER=$($PY -c "import json,sys; w=json.load(open('cal.json'))['wall_seconds']; print(max(20000, int(10000 * $WORK / w)))")
-step "b) calibration: 2x10000 iterations in $($PY -c "import json; print(round(json.load(open('cal.json'))['wall_seconds'], 2))") s -> --max-iter $MAXITER"
-mpirun -np 2 "$SNL" solve "$NET" -o ref.h5 --algorithm pipeline --max-iter "$MAXITER" --tol 0 -q
-step "b) uninterrupted reference run done"
-id=$(submit_wait 300 --ntasks=2 --time=1 --signal=B:USR1@50 -o b.log \
-  --export=ALL,SNL="$SNL",NET="$NET",OUT="$T/b.h5",MAXITER="$MAXITER",TOL=0 "$SRC/jobs/solve.sbatch")
-restarts=$(job_field "$id" Restarts)
-step "b) time-limited job $id finished after $restarts requeues"
-grep '^snl-solve:' b.log
-[ "$(job_field "$id" JobState)" = COMPLETED ] || fail "time-limited job state $(job_field "$id" JobState)"
-[ "${restarts:-0}" -ge 1 ] || fail "the time-limited job was never requeued (the solve ended before the signal?)"
-[ "$(grep -c 'requeueing job' b.log)" -eq "$restarts" ] || fail "requeue count in the log differs from Slurm's"
-# Every resumed run must start where its checkpoint stopped: the first progress
-# line after "resuming from ... (PHASE iteration K)" is PHASE at >= K, or a later phase.
-awk -v want_resumes="$restarts" '
-  function rank(ph) { return ph == "relaxation" ? 0 : ph == "mm" ? 1 : -1 }
-  /^snl-solve: resuming from/ {
-    if (pending) { print "no progress line after a resume"; bad = 1 }
-    ph = $(NF - 2); sub(/^\(/, "", ph); k = $NF; sub(/\)$/, "", k)
-    if (k !~ /^[0-9]+$/ || rank(ph) < 0 || (rank(ph) == 0 && k == 0)) { print "bad resume line: " $0; bad = 1 }
-    pending = 1; n++; next
-  }
-  pending && /^(relaxation|mm) +[0-9]+ / {
-    if (rank($1) < rank(ph) || (rank($1) == rank(ph) && $2 + 0 < k + 0)) {
-      print "resumed run restarted from scratch: checkpoint " ph " " k ", first progress " $1 " " $2; bad = 1
+cal=$($PY -c "import json; print(json.load(open('cal.json'))['wall_seconds'])")
+MAXITER=$($PY -c "print(max(20000, int(10000 * $WORK / $cal)))")
+step "b) calibration: 2x10000 iterations in $cal s -> --max-iter $MAXITER"
+
+# One time-limited job against an uninterrupted run; status 2: never signalled.
+time_limited() {
+  local maxiter=$1 id restarts
+  rm -f ref.h5 b.h5 b.ckpt.h5 b.json b.log
+  mpirun -np 2 "$SNL" solve "$NET" -o ref.h5 --algorithm pipeline --max-iter "$maxiter" --tol 0 -q ||
+    fail "reference run failed"
+  step "b) uninterrupted reference run (--max-iter $maxiter) done"
+  id=$(submit_wait 300 --ntasks=2 --time=1 --signal=B:USR1@55 -o b.log \
+    --export=ALL,SNL="$SNL",NET="$NET",OUT="$T/b.h5",MAXITER="$maxiter",TOL=0 "$SRC/jobs/solve.sbatch") || exit 1
+  restarts=$(job_field "$id" Restarts)
+  step "b) time-limited job $id finished after $restarts requeues"
+  grep '^snl-solve:' b.log
+  [ "$(job_field "$id" JobState)" = COMPLETED ] || fail "time-limited job state $(job_field "$id" JobState)"
+  if [ "${restarts:-0}" -eq 0 ]; then
+    grep -q 'stopped by a signal' b.log && fail "the job was stopped by Slurm's signal but not requeued"
+    return 2
+  fi
+  [ "$(grep -c 'requeueing job' b.log)" -eq "$restarts" ] || fail "requeue count in the log differs from Slurm's"
+  # Every resumed run must start where its checkpoint stopped: the first progress
+  # line after "resuming from ... (PHASE iteration K)" is PHASE at >= K, or a later phase.
+  awk -v want_resumes="$restarts" '
+    function rank(ph) { return ph == "relaxation" ? 0 : ph == "mm" ? 1 : -1 }
+    /^snl-solve: resuming from/ {
+      if (pending) { print "no progress line after a resume"; bad = 1 }
+      ph = $(NF - 2); sub(/^\(/, "", ph); k = $NF; sub(/\)$/, "", k)
+      if (k !~ /^[0-9]+$/ || rank(ph) < 0 || (rank(ph) == 0 && k == 0)) { print "bad resume line: " $0; bad = 1 }
+      pending = 1; n++; next
     }
-    pending = 0
-  }
-  END {
-    if (pending) { print "no progress line after the last resume"; bad = 1 }
-    if (n != want_resumes) { print n " resumes in the log, " want_resumes " requeues"; bad = 1 }
-    exit bad
-  }' b.log || fail "the requeued runs did not resume from their checkpoints (see above)"
-same_positions ref.h5 b.h5 "signalled, requeued and resumed job"
-step "b) positions equal the uninterrupted run's"
+    pending && /^(relaxation|mm) +[0-9]+ / {
+      if (rank($1) < rank(ph) || (rank($1) == rank(ph) && $2 + 0 < k + 0)) {
+        print "resumed run restarted from scratch: checkpoint " ph " " k ", first progress " $1 " " $2; bad = 1
+      }
+      pending = 0
+    }
+    END {
+      if (pending) { print "no progress line after the last resume"; bad = 1 }
+      if (n != want_resumes) { print n " resumes in the log, " want_resumes " requeues"; bad = 1 }
+      exit bad
+    }' b.log || fail "the requeued runs did not resume from their checkpoints (see above)"
+  same_positions ref.h5 b.h5 "signalled, requeued and resumed job"
+  step "b) positions equal the uninterrupted run's"
+}
+rc=0
+time_limited "$MAXITER" || rc=$?
+if [ $rc -eq 2 ]; then
+  step "b) the job ended before Slurm's signal (faster than calibrated): again with twice the work"
+  rc=0
+  time_limited $((2 * MAXITER)) || rc=$?
+  [ $rc -ne 2 ] || fail "the time-limited job was never signalled, even with twice the work"
+fi
+[ $rc -eq 0 ] || exit $rc
 echo "slurm_jobs: all checks passed in $((SECONDS - t0)) s"
