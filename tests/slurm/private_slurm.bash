@@ -67,6 +67,7 @@ SlurmctldPidFile=$dir/slurmctld.pid
 SlurmdPidFile=$dir/slurmd.pid
 StateSaveLocation=$dir/state
 SlurmdSpoolDir=$dir/spool
+TmpFS=$dir/tmp
 SlurmctldLogFile=$dir/log/slurmctld.log
 SlurmdLogFile=$dir/log/slurmd.log
 NodeName=$node NodeAddr=127.0.0.1 $hw State=UNKNOWN
@@ -93,7 +94,7 @@ _slurm_watchdog() {
   local owner=$1 p
   shift
   while kill -0 "$owner" 2> /dev/null; do sleep 2; done
-  scancel --quiet --user="$(id -un)" 2> /dev/null || true
+  timeout 10 scancel --quiet --user="$(id -un)" 2> /dev/null || true
   sleep 3
   for p in "$@"; do kill "$p" 2> /dev/null || true; done
   sleep 3
@@ -107,7 +108,7 @@ slurm_up() {
   # Never talk to another cluster: forget any Slurm job or configuration we run in.
   local v
   for v in $(env | sed -n 's/^\(SLURM_[A-Z_]*\)=.*/\1/p'); do unset "$v"; done
-  mkdir -p "$SLURM_DIR"/{state,spool,log}
+  mkdir -p "$SLURM_DIR"/{state,spool,log,tmp}
   local node hw ports
   node=$(hostname -s)
   # The node's real sockets/cores/threads, so that slurmd accepts the configuration.
@@ -123,9 +124,17 @@ slurm_up() {
   SLURM_PIDS+=($!)
   _slurm_watchdog $$ "${SLURM_PIDS[@]}" > /dev/null 2>&1 &
   SLURM_WATCHDOG=$!
-  local i state=""
+  local i d state=""
   for i in $(seq 60); do
-    state=$(sinfo -h -n "$node" -o %t 2> /dev/null || true)
+    # A daemon that exits at once says why in its log; do not wait for it.
+    for d in slurmctld:1 slurmd:2; do
+      kill -0 "${SLURM_PIDS[${d#*:}]}" 2> /dev/null && continue
+      d=${d%:*}
+      SLURM_WHY="$d exited at start: $(cat "$SLURM_DIR/log/$d.log" "$SLURM_DIR/log/$d.stdout" 2> /dev/null |
+        grep -m1 -E 'error|fatal')"
+      return 1
+    done
+    state=$(timeout 5 sinfo -h -n "$node" -o %t 2> /dev/null || true)
     case $state in idle*|mix*|alloc*) return 0;; esac
     sleep 0.5
   done
@@ -138,10 +147,10 @@ slurm_down() {
   local i p
   [ -z "$SLURM_WATCHDOG" ] || kill "$SLURM_WATCHDOG" 2> /dev/null || true
   SLURM_WATCHDOG=""
-  if [ -n "${SLURM_CONF:-}" ]; then
-    scancel --quiet --user="$(id -un)" 2> /dev/null || true
+  if [ ${#SLURM_PIDS[@]} -gt 1 ] && kill -0 "${SLURM_PIDS[1]}" 2> /dev/null; then  # slurmctld is up
+    timeout 10 scancel --quiet --user="$(id -un)" 2> /dev/null || true
     for i in $(seq 40); do
-      [ -z "$(squeue -h -o %i 2> /dev/null)" ] && break
+      [ -z "$(timeout 5 squeue -h -o %i 2> /dev/null)" ] && break
       sleep 0.25
     done
   fi
