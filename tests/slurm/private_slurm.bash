@@ -88,6 +88,25 @@ _slurm_start_munge() {
   return 1
 }
 
+# Job processes and step daemons of this cluster that outlived it (a job that
+# did not end when cancelled): they carry our SLURM_CONF in their environment,
+# and SLURM_JOB_ID or the name slurmstepd. Killed by PID.
+_slurm_kill_stragglers() {
+  local f p pids=()
+  for f in $(grep -lzxF "SLURM_CONF=$SLURM_CONF" /proc/[0-9]*/environ 2> /dev/null); do
+    p=${f#/proc/}
+    p=${p%/environ}
+    if grep -qz '^SLURM_JOB_ID=' "$f" 2> /dev/null || [ "$(cat "/proc/$p/comm" 2> /dev/null)" = slurmstepd ]; then
+      pids+=("$p")
+    fi
+  done
+  [ ${#pids[@]} -gt 0 ] || return 0
+  echo "private Slurm: killing leftover job processes ${pids[*]}" >&2
+  kill "${pids[@]}" 2> /dev/null || true
+  sleep 1
+  kill -KILL "${pids[@]}" 2> /dev/null || true
+}
+
 # Runs in the background: if the test shell dies without its cleanup (ctest
 # kills it at its timeout), cancel the jobs and stop the daemons anyway.
 _slurm_watchdog() {
@@ -99,6 +118,7 @@ _slurm_watchdog() {
   for p in "$@"; do kill "$p" 2> /dev/null || true; done
   sleep 3
   for p in "$@"; do kill -KILL "$p" 2> /dev/null || true; done
+  _slurm_kill_stragglers
 }
 
 slurm_up() {
@@ -160,6 +180,7 @@ slurm_down() {
     kill -KILL "$p" 2> /dev/null || true
     wait "$p" 2> /dev/null || true
   done
+  _slurm_kill_stragglers
   SLURM_PIDS=()
 }
 
