@@ -83,8 +83,7 @@ _slurm_start_munge() {
   munged --foreground --force --socket="$m/socket" --key-file="$m/key" --pid-file="$m/pid" \
     --seed-file="$m/seed" --log-file="$m/log" > "$m/stdout" 2>&1 &
   SLURM_PIDS+=($!)
-  local i
-  for i in $(seq 50); do [ -S "$m/socket" ] && return 0; sleep 0.1; done
+  for _ in $(seq 50); do [ -S "$m/socket" ] && return 0; sleep 0.1; done
   return 1
 }
 
@@ -144,8 +143,8 @@ slurm_up() {
   SLURM_PIDS+=($!)
   _slurm_watchdog $$ "${SLURM_PIDS[@]}" > /dev/null 2>&1 &
   SLURM_WATCHDOG=$!
-  local i d state=""
-  for i in $(seq 60); do
+  local d state=""
+  for _ in $(seq 60); do
     # A daemon that exits at once says why in its log; do not wait for it.
     for d in slurmctld:1 slurmd:2; do
       kill -0 "${SLURM_PIDS[${d#*:}]}" 2> /dev/null && continue
@@ -164,19 +163,19 @@ slurm_up() {
 
 slurm_down() {
   [ ${#SLURM_PIDS[@]} -gt 0 ] || return 0
-  local i p
+  local p
   [ -z "$SLURM_WATCHDOG" ] || kill "$SLURM_WATCHDOG" 2> /dev/null || true
   SLURM_WATCHDOG=""
   if [ ${#SLURM_PIDS[@]} -gt 1 ] && kill -0 "${SLURM_PIDS[1]}" 2> /dev/null; then  # slurmctld is up
     timeout 10 scancel --quiet --user="$(id -un)" 2> /dev/null || true
-    for i in $(seq 40); do
+    for _ in $(seq 40); do
       [ -z "$(timeout 5 squeue -h -o %i 2> /dev/null)" ] && break
       sleep 0.25
     done
   fi
   for p in "${SLURM_PIDS[@]}"; do kill "$p" 2> /dev/null || true; done
   for p in "${SLURM_PIDS[@]}"; do
-    for i in $(seq 40); do kill -0 "$p" 2> /dev/null || break; sleep 0.25; done
+    for _ in $(seq 40); do kill -0 "$p" 2> /dev/null || break; sleep 0.25; done
     kill -KILL "$p" 2> /dev/null || true
     wait "$p" 2> /dev/null || true
   done

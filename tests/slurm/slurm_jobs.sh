@@ -19,6 +19,7 @@ SNL=$(readlink -f "$SNL")
 PY=/usr/bin/python3
 SKIP=77
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
+# shellcheck source=tests/slurm/private_slurm.bash
 source "$HERE/private_slurm.bash"
 
 T=$(mktemp -d "${TMPDIR:-/tmp}/snl_slurm.XXXXXX")
@@ -59,7 +60,7 @@ NET=$SRC/inputs/net50_s0.05.h5
 mpirun -np 2 "$SNL" solve "$NET" -o direct.h5 --algorithm pipeline --max-iter 3000 --tol 1e-6 -q
 for launcher in mpirun srun; do
   id=$(submit_wait 120 --ntasks=2 --time=5 -o "a_$launcher.log" \
-    --export=ALL,SNL="$SNL",NET="$NET",OUT="$T/a_$launcher.h5",MAXITER=3000,TOL=1e-6,LAUNCHER=$launcher \
+    --export="ALL,SNL=$SNL,NET=$NET,OUT=$T/a_$launcher.h5,MAXITER=3000,TOL=1e-6,LAUNCHER=$launcher" \
     "$SRC/jobs/solve.sbatch") || exit 1
   [ "$(job_field "$id" JobState)" = COMPLETED ] || fail "solve job ($launcher) state $(job_field "$id" JobState)"
   [ -f "a_$launcher.ckpt.h5" ] || true  # --checkpoint-seconds 600: none for a short run
@@ -69,7 +70,7 @@ done
 
 # ---- c) the Monte Carlo array and its merge.
 id=$(submit_wait 120 --array=0-2 -o 'mc_%a.log' \
-  --export=ALL,SNL="$SNL",NET="$SRC/inputs/net10_s0.05.h5",DIR="$T/mc",SIGMAS="0.01 0.05",TRIALS=2,SEED0=40,EXTRA="--budget 2000" \
+  --export="ALL,SNL=$SNL,NET=$SRC/inputs/net10_s0.05.h5,DIR=$T/mc,SIGMAS=0.01 0.05,TRIALS=2,SEED0=40,EXTRA=--budget 2000" \
   "$SRC/jobs/experiment_array.sbatch") || exit 1
 for task in 0 1 2; do
   f=mc/task-$task.seed-$((40 + task)).csv
@@ -115,7 +116,7 @@ time_limited() {
     fail "reference run failed"
   step "b) uninterrupted reference run (--max-iter $maxiter) done"
   id=$(submit_wait 300 --ntasks=2 --time=1 --signal=B:USR1@55 -o b.log \
-    --export=ALL,SNL="$SNL",NET="$NET",OUT="$T/b.h5",MAXITER="$maxiter",TOL=0 "$SRC/jobs/solve.sbatch") || exit 1
+    --export="ALL,SNL=$SNL,NET=$NET,OUT=$T/b.h5,MAXITER=$maxiter,TOL=0" "$SRC/jobs/solve.sbatch") || exit 1
   restarts=$(job_field "$id" Restarts)
   step "b) time-limited job $id finished after $restarts requeues"
   grep '^snl-solve:' b.log
