@@ -94,6 +94,15 @@ assert merged[0] == header, merged[0]
 assert merged[1:] == expect, "rows differ"
 assert len(expect) == 3 * 2 * 2 * 3, len(expect)  # tasks x sigmas x trials x (relaxation, mm, bb)
 PY
+# A task with another header, or a task id twice, is refused and writes nothing.
+mkdir bad
+sed '1s/^sigma,/noise,/' mc/task-1.seed-41.csv > bad/task-1.seed-41.csv
+cp mc/task-2.seed-42.csv bad/task-2.seed-99.csv
+for set in "mc/task-0.seed-40.csv bad/task-1.seed-41.csv" "mc/task-2.seed-42.csv bad/task-2.seed-99.csv"; do
+  # shellcheck disable=SC2086
+  $PY "$SRC/jobs/merge_experiment.py" bad/merged.csv $set 2> /dev/null && fail "merge accepted $set"
+  [ ! -e bad/merged.csv ] || fail "a refused merge wrote its output"
+done
 step "c) experiment_array.sbatch: 3 tasks == direct runs with their seeds; merge checked"
 
 # ---- b) time limit: signal, checkpoint, requeue, resume.
