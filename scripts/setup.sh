@@ -7,9 +7,12 @@ cd "$(dirname "$0")/.."
 BUILD_DIR=${1:-build}
 shift || true
 
+# slurm-wlm and munge: tests/slurm runs the job scripts of jobs/ under a private
+# one-node Slurm that it starts and stops itself (it never uses a system-wide one).
 PKGS=(build-essential cmake ninja-build pkg-config openmpi-bin libopenmpi-dev libhdf5-openmpi-dev hdf5-tools
       libeigen3-dev libmetis-dev libgtest-dev libgmock-dev libcli11-dev libbenchmark-dev
-      python3-numpy python3-h5py python3-matplotlib clang libclang-rt-14-dev)
+      python3-numpy python3-h5py python3-matplotlib clang libclang-rt-14-dev
+      slurm-wlm munge)
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
