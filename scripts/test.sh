@@ -16,7 +16,8 @@ if [ "${SNL_SKIP_SANITIZE:-0}" != 1 ]; then
   export ASAN_OPTIONS=detect_leaks=0:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
   # The long end-to-end fault scenarios (repeated kills, restarts) ran above on the
   # Release build; under the sanitizers they would only repeat the same code paths
-  # ten times slower; the install test builds an uninstrumented consumer. Every
+  # ten times slower; the install test builds an uninstrumented consumer; the Slurm
+  # test exercises the batch scripts, not the library. Every
   # unit, MPI and other CLI test runs here.
-  (cd build-asan && ctest --output-on-failure -j "$JOBS" -E "${SNL_ASAN_EXCLUDE:-cli.kill_restart|cli.checkpoint_restart|cli.install_consumer|fuzz}")
+  (cd build-asan && ctest --output-on-failure -j "$JOBS" -E "${SNL_ASAN_EXCLUDE:-cli.kill_restart|cli.checkpoint_restart|cli.install_consumer|fuzz|slurm.jobs}")
 fi
