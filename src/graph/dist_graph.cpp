@@ -563,7 +563,7 @@ HaloPlan make_halo(MPI_Comm comm, const std::vector<int>& owner, const std::vect
 DistGraph::DistGraph(MPI_Comm comm, GlobalId n, const std::vector<int>& owner, const std::vector<GlobalId>& edges,
                      const std::vector<double>& edge_values, int width, int halo_width, LocalOrdering ordering)
     : comm_(comm), n_global_(n), width_(width) {
-  const MPI_Comm gc = comm;
+  const MPI_Comm gc = comm_.get();  // the graph's own duplicate (halo traffic apart from the caller's)
   const int rank = comm_rank(gc);
   PhaseClock clock(build_phases_);
   std::vector<EdgeRec> mine;
@@ -600,7 +600,7 @@ LocalId DistGraph::max_degree() const {
   LocalId d = 0;
   for (LocalId v = 0; v < n_owned_; ++v) d = std::max(d, degree(v));
   LocalId g = 0;
-  MPI_Allreduce(&d, &g, 1, MPI_INT32_T, MPI_MAX, comm_);
+  MPI_Allreduce(&d, &g, 1, MPI_INT32_T, MPI_MAX, comm_.get());
   return g;
 }
 
