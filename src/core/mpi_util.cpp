@@ -21,6 +21,15 @@ int comm_size(MPI_Comm comm) {
   return s;
 }
 
+DupComm::DupComm(MPI_Comm comm) { MPI_Comm_dup(comm, &comm_); }
+
+DupComm::~DupComm() {
+  if (comm_ == MPI_COMM_NULL) return;
+  int finalized = 0;
+  MPI_Finalized(&finalized);  // an object outliving MPI_Finalize must not call MPI
+  if (!finalized) MPI_Comm_free(&comm_);
+}
+
 std::string bcast_string(MPI_Comm comm, const std::string& s, int root) {
   long long len = static_cast<long long>(s.size());
   MPI_Bcast(&len, 1, MPI_LONG_LONG, root, comm);

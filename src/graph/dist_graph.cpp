@@ -66,6 +66,59 @@ std::string metis_partition(GlobalId n, const std::vector<GlobalId>& edges, int 
 
 }  // namespace
 
+namespace {
+
+// METIS on rank 0 over the gathered edge lists, owners broadcast to every
+// rank. Collective; returns "" on success, else why it could not run.
+template <class Phase>
+std::string metis_on_root(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, std::vector<int>& owner,
+                          Phase&& phase) {
+  std::vector<GlobalId> all = gather_to_root(comm, edges);
+  phase("gather");
+  std::string why;
+  if (comm_rank(comm) == 0) {
+    try {
+      why = metis_partition(n, all, comm_size(comm), owner, phase);
+    } catch (const std::bad_alloc&) {
+      why = "out of memory building the METIS graph";
+    }
+  }
+  all.clear();
+  all.shrink_to_fit();
+  why = bcast_string(comm, why);
+  if (why.empty()) {
+    bcast_bytes(comm, owner.data(), owner.size() * sizeof(int));
+    phase("bcast");
+  }
+  return why;
+}
+
+// Contiguous blocks of global ids (block_range), one per rank.
+void block_owners(GlobalId n, int size, std::vector<int>& owner) {
+  for (int r = 0; r < size; ++r) {
+    GlobalId b, e;
+    block_range(n, size, r, b, e);
+    std::fill(owner.begin() + b, owner.begin() + e, r);
+  }
+}
+
+// Edge cut (collective) and imbalance of `owner` into stats.
+void partition_quality(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, const std::vector<int>& owner,
+                       PartitionStats& stats) {
+  const int size = comm_size(comm);
+  long long cut = 0;
+  for (std::size_t e = 0; e < edges.size(); e += 2) cut += owner[edges[e]] != owner[edges[e + 1]];
+  long long gcut = 0;
+  MPI_Allreduce(&cut, &gcut, 1, MPI_LONG_LONG, MPI_SUM, comm);
+  stats.edge_cut = gcut;
+  std::vector<GlobalId> counts(size, 0);
+  for (int o : owner) ++counts[o];
+  const double mean = static_cast<double>(n) / size;
+  stats.imbalance = mean > 0 ? static_cast<double>(*std::max_element(counts.begin(), counts.end())) / mean : 1.0;
+}
+
+}  // namespace
+
 std::vector<int> partition_graph(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges,
                                  PartitionMethod method, PartitionStats* stats) {
   const double t0 = MPI_Wtime();
@@ -76,27 +129,13 @@ std::vector<int> partition_graph(MPI_Comm comm, GlobalId n, const std::vector<Gl
     phases.emplace_back(name, now - tmark);
     tmark = now;
   };
-  const int size = comm_size(comm), rank = comm_rank(comm);
+  const int size = comm_size(comm);
   std::vector<int> owner(static_cast<std::size_t>(n));
   std::string used = "block", note;
   bool done = false;
   if (method == PartitionMethod::kMetis && size > 1) {
-    std::vector<GlobalId> all = gather_to_root(comm, edges);
-    phase("gather");
-    std::string why;
-    if (rank == 0) {
-      try {
-        why = metis_partition(n, all, size, owner, phase);
-      } catch (const std::bad_alloc&) {
-        why = "out of memory building the METIS graph";
-      }
-    }
-    all.clear();
-    all.shrink_to_fit();
-    why = bcast_string(comm, why);
+    const std::string why = metis_on_root(comm, n, edges, owner, phase);
     if (why.empty()) {
-      bcast_bytes(comm, owner.data(), owner.size() * sizeof(int));
-      phase("bcast");
       used = "metis";
       done = true;
     } else {
@@ -105,25 +144,11 @@ std::vector<int> partition_graph(MPI_Comm comm, GlobalId n, const std::vector<Gl
   } else if (method == PartitionMethod::kMetis) {
     used = "metis";  // one rank: the trivial partition
   }
-  if (!done) {
-    for (int r = 0; r < size; ++r) {
-      GlobalId b, e;
-      block_range(n, size, r, b, e);
-      std::fill(owner.begin() + b, owner.begin() + e, r);
-    }
-  }
+  if (!done) block_owners(n, size, owner);
   if (stats) {
     stats->method = used;
     stats->note = note;
-    long long cut = 0;
-    for (std::size_t e = 0; e < edges.size(); e += 2) cut += owner[edges[e]] != owner[edges[e + 1]];
-    long long gcut = 0;
-    MPI_Allreduce(&cut, &gcut, 1, MPI_LONG_LONG, MPI_SUM, comm);
-    stats->edge_cut = gcut;
-    std::vector<GlobalId> counts(size, 0);
-    for (int o : owner) ++counts[o];
-    const double mean = static_cast<double>(n) / size;
-    stats->imbalance = mean > 0 ? static_cast<double>(*std::max_element(counts.begin(), counts.end())) / mean : 1.0;
+    partition_quality(comm, n, edges, owner, *stats);
     phase("stats");
     stats->phases = std::move(phases);
     stats->seconds = MPI_Wtime() - t0;
@@ -160,6 +185,117 @@ void sort_degree_windows(std::vector<std::int64_t>& grp, const std::vector<std::
   }
 }
 
+// The adjacency of one group (interior or boundary) in group positions
+// (32-bit), neighbours in the same order as in `nbrs`: the scattered nodes ->
+// cnt -> nbrs -> pos lookups are done once here instead of in each of the two
+// BFS sweeps of rcm_order.
+struct GroupGraph {
+  std::vector<std::int64_t> off;
+  std::vector<std::int32_t> adj, deg;
+};
+
+GroupGraph group_graph(const std::vector<std::int64_t>& nodes, const std::vector<std::int64_t>& cnt,
+                       const std::vector<std::int64_t>& nbrs, const std::vector<std::int64_t>& pos) {
+  const std::size_t m = nodes.size();
+  GroupGraph g;
+  g.off.assign(m + 1, 0);
+  {
+    std::size_t total = 0;
+    for (std::size_t t = 0; t < m; ++t) total += std::size_t(cnt[nodes[t] + 1] - cnt[nodes[t]]);
+    g.adj.reserve(total);
+  }
+  for (std::size_t t = 0; t < m; ++t) {
+    for (auto k = cnt[nodes[t]]; k < cnt[nodes[t] + 1]; ++k)
+      if (nbrs[k] >= 0 && pos[nbrs[k]] >= 0) g.adj.push_back(static_cast<std::int32_t>(pos[nbrs[k]]));
+    g.off[t + 1] = static_cast<std::int64_t>(g.adj.size());
+  }
+  g.deg.resize(m);
+  for (std::size_t t = 0; t < m; ++t) g.deg[t] = static_cast<std::int32_t>(g.off[t + 1] - g.off[t]);
+  return g;
+}
+
+// Positions by increasing degree, ties by position, i.e. by global id (a
+// counting sort: degrees are small, and it is stable): the BFS start candidates.
+std::vector<std::int64_t> by_degree(const std::vector<std::int32_t>& deg) {
+  const std::size_t m = deg.size();
+  std::vector<std::int64_t> by_deg(m);
+  const std::int32_t max_deg = m ? *std::max_element(deg.begin(), deg.end()) : 0;
+  std::vector<std::int64_t> start(static_cast<std::size_t>(max_deg) + 2, 0);
+  for (std::size_t t = 0; t < m; ++t) ++start[deg[t] + 1];
+  for (std::size_t d = 1; d < start.size(); ++d) start[d] += start[d - 1];
+  for (std::size_t t = 0; t < m; ++t) by_deg[start[deg[t]]++] = static_cast<std::int64_t>(t);
+  return by_deg;
+}
+
+// The BFS sweeps of rcm_order over one GroupGraph; `order` collects group
+// positions in Cuthill-McKee order (not yet reversed).
+class CuthillMcKee {
+ public:
+  explicit CuthillMcKee(const GroupGraph& g) : g_(g), seen_(g.deg.size(), 0), level_(g.deg.size(), -1) {
+    order.reserve(g.deg.size());
+  }
+  bool seen(std::int64_t t) const { return seen_[t] != 0; }
+  // Appends t as the root of a sweep.
+  void add_root(std::int64_t t) {
+    seen_[t] = 1;
+    order.push_back(t);
+  }
+
+  // One BFS from s over unseen nodes; returns the last level's min-degree
+  // node (George-Liu's pseudo-peripheral node, one sweep).
+  std::int64_t bfs_far(std::int64_t s) {
+    queue_.assign(1, s);
+    level_[s] = 0;
+    std::int64_t best = s;
+    for (std::size_t h = 0; h < queue_.size(); ++h) {
+      const std::int64_t t = queue_[h];
+      if (level_[t] > level_[best] || (level_[t] == level_[best] && g_.deg[t] < g_.deg[best])) best = t;
+      for (auto k = g_.off[t]; k < g_.off[t + 1]; ++k) {
+        const std::int64_t u = g_.adj[k];
+        if (!seen_[u] && level_[u] < 0) {
+          level_[u] = level_[t] + 1;
+          queue_.push_back(u);
+        }
+      }
+    }
+    for (auto t : queue_) level_[t] = -1;
+    return best;
+  }
+
+  // One Cuthill-McKee BFS from the nodes already appended at `head`: each
+  // node's unseen neighbours by increasing degree.
+  void sweep(std::size_t head) {
+    for (; head < order.size(); ++head) {
+      const std::int64_t t = order[head];
+      kids_.clear();
+      for (auto k = g_.off[t]; k < g_.off[t + 1]; ++k) {
+        const std::int64_t u = g_.adj[k];
+        if (!seen_[u]) {
+          seen_[u] = 1;
+          kids_.push_back(u);
+        }
+      }
+      // Stable insertion sort by degree: a node has few children, and
+      // std::stable_sort allocates a buffer on every call (5M calls at 10M).
+      for (std::size_t i = 1; i < kids_.size(); ++i) {
+        const std::int64_t u = kids_[i];
+        std::size_t j = i;
+        for (; j > 0 && g_.deg[kids_[j - 1]] > g_.deg[u]; --j) kids_[j] = kids_[j - 1];
+        kids_[j] = u;
+      }
+      order.insert(order.end(), kids_.begin(), kids_.end());
+    }
+  }
+
+  std::vector<std::int64_t> order;
+
+ private:
+  const GroupGraph& g_;
+  std::vector<char> seen_;
+  std::vector<std::int32_t> level_;
+  std::vector<std::int64_t> kids_, queue_;
+};
+
 // Reverse Cuthill-McKee of the graph (cnt, nbrs) restricted to `nodes` (one
 // group: interior or boundary): BFS from a pseudo-peripheral node (George-Liu,
 // one sweep), children by increasing degree, then reversed. `pos[v]` is v's
@@ -173,113 +309,47 @@ void sort_degree_windows(std::vector<std::int64_t>& grp, const std::vector<std::
 std::vector<std::int64_t> rcm_order(const std::vector<std::int64_t>& nodes, const std::vector<std::int64_t>& cnt,
                                     const std::vector<std::int64_t>& nbrs, const std::vector<std::int64_t>& pos,
                                     const std::vector<std::int64_t>& seeds) {
-  const std::size_t m = nodes.size();
-  // The group's own adjacency in group positions (32-bit), neighbours in the
-  // same order as in `nbrs`: the scattered nodes -> cnt -> nbrs -> pos lookups
-  // are done once here instead of in each of the two BFS sweeps.
-  std::vector<std::int64_t> off(m + 1, 0);
-  std::vector<std::int32_t> adj;
-  {
-    std::size_t total = 0;
-    for (std::size_t t = 0; t < m; ++t) total += std::size_t(cnt[nodes[t] + 1] - cnt[nodes[t]]);
-    adj.reserve(total);
-  }
-  for (std::size_t t = 0; t < m; ++t) {
-    for (auto k = cnt[nodes[t]]; k < cnt[nodes[t] + 1]; ++k)
-      if (nbrs[k] >= 0 && pos[nbrs[k]] >= 0) adj.push_back(static_cast<std::int32_t>(pos[nbrs[k]]));
-    off[t + 1] = static_cast<std::int64_t>(adj.size());
-  }
-  std::vector<std::int32_t> deg(m);
-  for (std::size_t t = 0; t < m; ++t) deg[t] = static_cast<std::int32_t>(off[t + 1] - off[t]);
-  std::vector<std::int64_t> order;  // positions in `nodes`
-  order.reserve(m);
-  std::vector<char> seen(m, 0);
-  std::vector<std::int32_t> level(m, -1);
-  std::vector<std::int64_t> kids;
-  // One BFS from s over unseen nodes; returns the last level's min-degree node.
-  std::vector<std::int64_t> queue;
-  auto bfs_far = [&](std::int64_t s) {
-    queue.assign(1, s);
-    level[s] = 0;
-    std::int64_t best = s;
-    for (std::size_t h = 0; h < queue.size(); ++h) {
-      const std::int64_t t = queue[h];
-      if (level[t] > level[best] || (level[t] == level[best] && deg[t] < deg[best])) best = t;
-      for (auto k = off[t]; k < off[t + 1]; ++k) {
-        const std::int64_t u = adj[k];
-        if (!seen[u] && level[u] < 0) {
-          level[u] = level[t] + 1;
-          queue.push_back(u);
-        }
-      }
-    }
-    for (auto t : queue) level[t] = -1;
-    return best;
-  };
-  // Start candidates: by increasing degree, ties by global id (a counting
-  // sort: degrees are small, and it is stable).
-  std::vector<std::int64_t> by_deg(m);
-  {
-    const std::int32_t max_deg = m ? *std::max_element(deg.begin(), deg.end()) : 0;
-    std::vector<std::int64_t> start(static_cast<std::size_t>(max_deg) + 2, 0);
-    for (std::size_t t = 0; t < m; ++t) ++start[deg[t] + 1];
-    for (std::size_t d = 1; d < start.size(); ++d) start[d] += start[d - 1];
-    for (std::size_t t = 0; t < m; ++t) by_deg[start[deg[t]]++] = static_cast<std::int64_t>(t);
-  }
-  // One Cuthill-McKee BFS from the nodes already appended at `head`.
-  auto cuthill_mckee = [&](std::size_t head) {
-    for (; head < order.size(); ++head) {
-      const std::int64_t t = order[head];
-      kids.clear();
-      for (auto k = off[t]; k < off[t + 1]; ++k) {
-        const std::int64_t u = adj[k];
-        if (!seen[u]) {
-          seen[u] = 1;
-          kids.push_back(u);
-        }
-      }
-      // Stable insertion sort by degree: a node has few children, and
-      // std::stable_sort allocates a buffer on every call (5M calls at 10M).
-      for (std::size_t i = 1; i < kids.size(); ++i) {
-        const std::int64_t u = kids[i];
-        std::size_t j = i;
-        for (; j > 0 && deg[kids[j - 1]] > deg[u]; --j) kids[j] = kids[j - 1];
-        kids[j] = u;
-      }
-      order.insert(order.end(), kids.begin(), kids.end());
-    }
-  };
+  const GroupGraph g = group_graph(nodes, cnt, nbrs, pos);
+  const std::vector<std::int64_t> candidates = by_degree(g.deg);
+  CuthillMcKee cm(g);
   for (std::int64_t t : seeds)
-    if (!seen[t]) {
-      seen[t] = 1;
-      order.push_back(t);
-    }
-  cuthill_mckee(0);
-  for (std::int64_t cand : by_deg) {  // components without seeds
-    if (seen[cand]) continue;
-    const std::int64_t s = bfs_far(cand);
-    const std::size_t head = order.size();
-    order.push_back(s);
-    seen[s] = 1;
-    cuthill_mckee(head);
+    if (!cm.seen(t)) cm.add_root(t);
+  cm.sweep(0);
+  for (std::int64_t cand : candidates) {  // components without seeds
+    if (cm.seen(cand)) continue;
+    const std::int64_t s = cm.bfs_far(cand);
+    const std::size_t head = cm.order.size();
+    cm.add_root(s);
+    cm.sweep(head);
   }
+  std::vector<std::int64_t> order = std::move(cm.order);
   std::reverse(order.begin(), order.end());
   for (auto& t : order) t = nodes[t];
   return order;
 }
-}  // namespace
 
-DistGraph::DistGraph(MPI_Comm comm, GlobalId n, const std::vector<int>& owner, const std::vector<GlobalId>& edges,
-                     const std::vector<double>& edge_values, int width, int halo_width, LocalOrdering ordering)
-    : comm_(comm), n_global_(n), width_(width) {
-  const int size = comm_size(comm), rank = comm_rank(comm);
-  double tmark = MPI_Wtime();
-  auto phase_done = [&](const char* name) {
+// Seconds of the constructor's phases (DistGraph::build_phases): done(name)
+// records the time since the previous mark.
+class PhaseClock {
+ public:
+  explicit PhaseClock(std::vector<std::pair<std::string, double>>& out) : out_(out), mark_(MPI_Wtime()) {}
+  void done(const char* name) {
     const double now = MPI_Wtime();
-    build_phases_.emplace_back(name, now - tmark);
-    tmark = now;
-  };
-  // 1. Every edge goes to the owners of both ends (once if they coincide).
+    out_.emplace_back(name, now - mark_);
+    mark_ = now;
+  }
+
+ private:
+  std::vector<std::pair<std::string, double>>& out_;
+  double mark_;
+};
+
+// Step 1: every edge goes to the owners of both ends (once if they
+// coincide), with its `width` values; returns what this rank received.
+void route_edges(MPI_Comm comm, const std::vector<int>& owner, const std::vector<GlobalId>& edges,
+                 const std::vector<double>& edge_values, int width, std::vector<EdgeRec>& mine,
+                 std::vector<double>& mine_vals) {
+  const int size = comm_size(comm);
   std::vector<std::vector<EdgeRec>> out(size);
   std::vector<std::vector<double>> out_vals(size);
   for (std::size_t e = 0; 2 * e < edges.size(); ++e) {
@@ -292,123 +362,164 @@ DistGraph::DistGraph(MPI_Comm comm, GlobalId n, const std::vector<int>& owner, c
       out_vals[ob].insert(out_vals[ob].end(), edge_values.begin() + e * width, edge_values.begin() + (e + 1) * width);
     }
   }
-  std::vector<EdgeRec> mine = exchange_records(comm, out);
-  std::vector<double> mine_vals = exchange_records(comm, out_vals);
-  out.clear();
-  out_vals.clear();
+  mine = exchange_records(comm, out);
+  mine_vals = exchange_records(comm, out_vals);
+}
 
-  phase_done("exchange");
-  // 2. Owned nodes in global order, then per-node neighbour lists.
-  std::vector<GlobalId> owned;
+// The owned nodes and their neighbour lists, indexed by position in `owned`
+// (global order), before the local numbering.
+struct OwnedLists {
+  std::vector<GlobalId> owned;          // owned nodes in global order
+  std::vector<std::int32_t> owned_pos;  // global id -> index in `owned`, -1 if not owned
+  std::vector<std::int64_t> cnt;        // owned index v: entries [cnt[v], cnt[v + 1])
+  std::vector<Entry> entries;           // per node sorted by neighbour global id
+  std::vector<char> boundary;           // owned index v has a neighbour on another rank
+  std::int64_t index(GlobalId g) const { return owned_pos[g]; }
+};
+
+// Step 2: the owned nodes in global order, then per-node neighbour lists
+// sorted by global id (the fixed summation order) from the received edges.
+OwnedLists neighbour_lists(GlobalId n, const std::vector<int>& owner, int rank, const std::vector<EdgeRec>& mine) {
+  OwnedLists L;
   for (GlobalId g = 0; g < n; ++g)
-    if (owner[g] == rank) owned.push_back(g);
-  if (owned.size() > static_cast<std::size_t>(std::numeric_limits<LocalId>::max()))
+    if (owner[g] == rank) L.owned.push_back(g);
+  if (L.owned.size() > static_cast<std::size_t>(std::numeric_limits<LocalId>::max()))
     throw Error("too many sensors on one rank for 32-bit local ids; use more ranks");
   // Global id -> index in `owned` in O(1) (4 bytes per global node, like
   // `owner`): a binary search per edge end dominated the setup at 10^7 nodes.
-  std::vector<std::int32_t> owned_pos(static_cast<std::size_t>(n), -1);
-  for (std::size_t v = 0; v < owned.size(); ++v) owned_pos[owned[v]] = static_cast<std::int32_t>(v);
-  auto owned_index = [&](GlobalId g) -> std::int64_t { return owned_pos[g]; };
-  std::vector<std::int64_t> cnt(owned.size() + 1, 0);
+  L.owned_pos.assign(static_cast<std::size_t>(n), -1);
+  for (std::size_t v = 0; v < L.owned.size(); ++v) L.owned_pos[L.owned[v]] = static_cast<std::int32_t>(v);
+  L.cnt.assign(L.owned.size() + 1, 0);
   for (const auto& r : mine) {
-    if (owner[r.a] == rank) ++cnt[owned_index(r.a) + 1];
-    if (owner[r.b] == rank) ++cnt[owned_index(r.b) + 1];
+    if (owner[r.a] == rank) ++L.cnt[L.index(r.a) + 1];
+    if (owner[r.b] == rank) ++L.cnt[L.index(r.b) + 1];
   }
-  for (std::size_t v = 0; v < owned.size(); ++v) cnt[v + 1] += cnt[v];
-  std::vector<Entry> entries(static_cast<std::size_t>(cnt.back()));
+  for (std::size_t v = 0; v < L.owned.size(); ++v) L.cnt[v + 1] += L.cnt[v];
+  L.entries.resize(static_cast<std::size_t>(L.cnt.back()));
   {
-    std::vector<std::int64_t> fill(cnt.begin(), cnt.end() - 1);
+    std::vector<std::int64_t> fill(L.cnt.begin(), L.cnt.end() - 1);
     for (std::size_t t = 0; t < mine.size(); ++t) {
       const auto& r = mine[t];
-      if (owner[r.a] == rank) entries[fill[owned_index(r.a)]++] = {r.b, static_cast<std::int64_t>(t)};
-      if (owner[r.b] == rank) entries[fill[owned_index(r.b)]++] = {r.a, static_cast<std::int64_t>(t)};
+      if (owner[r.a] == rank) L.entries[fill[L.index(r.a)]++] = {r.b, static_cast<std::int64_t>(t)};
+      if (owner[r.b] == rank) L.entries[fill[L.index(r.b)]++] = {r.a, static_cast<std::int64_t>(t)};
     }
   }
-  std::vector<char> boundary(owned.size(), 0);
-  for (std::size_t v = 0; v < owned.size(); ++v) {
-    std::sort(entries.begin() + cnt[v], entries.begin() + cnt[v + 1],
+  L.boundary.assign(L.owned.size(), 0);
+  for (std::size_t v = 0; v < L.owned.size(); ++v) {
+    std::sort(L.entries.begin() + L.cnt[v], L.entries.begin() + L.cnt[v + 1],
               [](const Entry& x, const Entry& y) { return x.nbr < y.nbr; });
-    for (auto k = cnt[v]; k < cnt[v + 1]; ++k)
-      if (owner[entries[k].nbr] != rank) boundary[v] = 1;
+    for (auto k = L.cnt[v]; k < L.cnt[v + 1]; ++k)
+      if (owner[L.entries[k].nbr] != rank) L.boundary[v] = 1;
   }
+  return L;
+}
 
-  phase_done("lists");
-  // 3. Local numbering: interior owned, boundary owned (each group in RCM or
-  //    global order), ghosts by (owner, gid) so each neighbour's slots are contiguous.
-  std::vector<std::int64_t> order;  // owned index in local order
-  order.reserve(owned.size());
-  {
-    std::vector<std::int64_t> group[2];
-    for (std::size_t v = 0; v < owned.size(); ++v) group[boundary[v] ? 1 : 0].push_back(static_cast<std::int64_t>(v));
-    if (ordering == LocalOrdering::kRcm) {
-      // Owned-index adjacency (-1 for ghosts) and group positions for the BFS.
-      std::vector<std::int64_t> nbrs(entries.size());
-      for (std::size_t k = 0; k < entries.size(); ++k) nbrs[k] = owned_index(entries[k].nbr);
-      std::vector<std::int64_t> pos(owned.size(), -1);
-      std::vector<std::int64_t> seeds;
-      for (int gi : {1, 0}) {  // the boundary first: its order seeds the interior's
-        auto& grp = group[gi];
-        for (std::size_t t = 0; t < grp.size(); ++t) pos[grp[t]] = static_cast<std::int64_t>(t);
-        if (gi == 0)  // interior nodes next to the boundary, in the boundary's order
-          for (auto b : group[1])
-            for (auto k = cnt[b]; k < cnt[b + 1]; ++k)
-              if (nbrs[k] >= 0 && !boundary[nbrs[k]]) seeds.push_back(pos[nbrs[k]]);
-        grp = rcm_order(grp, cnt, nbrs, pos, seeds);
-        for (auto v : grp) pos[v] = -1;
-        sort_degree_windows(grp, cnt);
-      }
-    }
-    order = std::move(group[0]);
-    n_interior_ = static_cast<LocalId>(order.size());
-    order.insert(order.end(), group[1].begin(), group[1].end());
+// RCM order of the two groups of owned indices (group[0] interior, group[1]
+// boundary), each then sorted by degree within windows.
+void rcm_groups(const OwnedLists& L, std::vector<std::int64_t> (&group)[2]) {
+  // Owned-index adjacency (-1 for ghosts) and group positions for the BFS.
+  std::vector<std::int64_t> nbrs(L.entries.size());
+  for (std::size_t k = 0; k < L.entries.size(); ++k) nbrs[k] = L.index(L.entries[k].nbr);
+  std::vector<std::int64_t> pos(L.owned.size(), -1);
+  std::vector<std::int64_t> seeds;
+  for (int gi : {1, 0}) {  // the boundary first: its order seeds the interior's
+    auto& grp = group[gi];
+    for (std::size_t t = 0; t < grp.size(); ++t) pos[grp[t]] = static_cast<std::int64_t>(t);
+    if (gi == 0)  // interior nodes next to the boundary, in the boundary's order
+      for (auto b : group[1])
+        for (auto k = L.cnt[b]; k < L.cnt[b + 1]; ++k)
+          if (nbrs[k] >= 0 && !L.boundary[nbrs[k]]) seeds.push_back(pos[nbrs[k]]);
+    grp = rcm_order(grp, L.cnt, nbrs, pos, seeds);
+    for (auto v : grp) pos[v] = -1;
+    sort_degree_windows(grp, L.cnt);
   }
-  phase_done("order");
-  n_owned_ = static_cast<LocalId>(owned.size());
+}
+
+// Step 3: owned indices in local order: interior, then boundary, each group
+// in RCM or global order. Sets n_interior.
+std::vector<std::int64_t> local_order(const OwnedLists& L, LocalOrdering ordering, LocalId& n_interior) {
+  std::vector<std::int64_t> group[2];
+  for (std::size_t v = 0; v < L.owned.size(); ++v) group[L.boundary[v] ? 1 : 0].push_back(static_cast<std::int64_t>(v));
+  if (ordering == LocalOrdering::kRcm) rcm_groups(L, group);
+  std::vector<std::int64_t> order = std::move(group[0]);
+  n_interior = static_cast<LocalId>(order.size());
+  order.insert(order.end(), group[1].begin(), group[1].end());
+  return order;
+}
+
+// Step 4: the ghosts, by (owner, gid) so that each neighbour rank's slots are
+// contiguous.
+std::vector<GlobalId> ghost_nodes(const OwnedLists& L, const std::vector<int>& owner, int rank) {
   std::vector<GlobalId> ghosts;
-  for (const auto& en : entries)
+  for (const auto& en : L.entries)
     if (owner[en.nbr] != rank) ghosts.push_back(en.nbr);
   std::sort(ghosts.begin(), ghosts.end(), [&](GlobalId x, GlobalId y) {
     return owner[x] != owner[y] ? owner[x] < owner[y] : x < y;
   });
   ghosts.erase(std::unique(ghosts.begin(), ghosts.end()), ghosts.end());
-  if (owned.size() + ghosts.size() > static_cast<std::size_t>(std::numeric_limits<LocalId>::max()))
+  if (L.owned.size() + ghosts.size() > static_cast<std::size_t>(std::numeric_limits<LocalId>::max()))
     throw Error("too many local nodes on one rank for 32-bit local ids; use more ranks");
+  return ghosts;
+}
 
-  local_to_global_.resize(owned.size() + ghosts.size());
-  std::vector<LocalId> owned_to_local(owned.size());
-  for (std::size_t l = 0; l < order.size(); ++l) {
-    local_to_global_[l] = owned[order[l]];
-    owned_to_local[order[l]] = static_cast<LocalId>(l);
+// Global id -> local id during the build: owned nodes through their owned
+// index, ghosts by binary search.
+struct LocalIds {
+  std::vector<LocalId> owned_to_local;                    // owned index -> local id
+  std::vector<std::pair<GlobalId, LocalId>> ghost_sorted;  // (gid, local id), by gid
+  LocalId ghost(GlobalId g) const {
+    return std::lower_bound(ghost_sorted.begin(), ghost_sorted.end(), std::make_pair(g, LocalId(-1)))->second;
   }
-  for (std::size_t t = 0; t < ghosts.size(); ++t) local_to_global_[owned.size() + t] = ghosts[t];
-  owned_sorted_.resize(owned.size());
-  for (std::size_t v = 0; v < owned.size(); ++v) owned_sorted_[v] = {owned[v], owned_to_local[v]};
-  std::vector<std::pair<GlobalId, LocalId>> ghost_sorted(ghosts.size());
-  for (std::size_t t = 0; t < ghosts.size(); ++t)
-    ghost_sorted[t] = {ghosts[t], static_cast<LocalId>(owned.size() + t)};
-  std::sort(ghost_sorted.begin(), ghost_sorted.end());
-  auto to_local = [&](GlobalId g) -> LocalId {
-    if (owner[g] == rank) return owned_to_local[owned_index(g)];
-    auto it = std::lower_bound(ghost_sorted.begin(), ghost_sorted.end(), std::make_pair(g, LocalId(-1)));
-    return it->second;
-  };
+};
 
-  // 4. CSR in local order.
-  offsets_.assign(owned.size() + 1, 0);
-  adjacency_.resize(entries.size());
-  edge_values_.resize(entries.size() * width);
+// Step 4 (cont.): local ids: owned nodes in `order`, then the ghosts; fills
+// the graph's local_to_global and owned_sorted.
+LocalIds number_nodes(const OwnedLists& L, const std::vector<std::int64_t>& order, const std::vector<GlobalId>& ghosts,
+                      std::vector<GlobalId>& local_to_global, std::vector<std::pair<GlobalId, LocalId>>& owned_sorted) {
+  const std::size_t n_owned = L.owned.size();
+  LocalIds ids;
+  local_to_global.resize(n_owned + ghosts.size());
+  ids.owned_to_local.resize(n_owned);
+  for (std::size_t l = 0; l < order.size(); ++l) {
+    local_to_global[l] = L.owned[order[l]];
+    ids.owned_to_local[order[l]] = static_cast<LocalId>(l);
+  }
+  for (std::size_t t = 0; t < ghosts.size(); ++t) local_to_global[n_owned + t] = ghosts[t];
+  owned_sorted.resize(n_owned);
+  for (std::size_t v = 0; v < n_owned; ++v) owned_sorted[v] = {L.owned[v], ids.owned_to_local[v]};
+  ids.ghost_sorted.resize(ghosts.size());
+  for (std::size_t t = 0; t < ghosts.size(); ++t)
+    ids.ghost_sorted[t] = {ghosts[t], static_cast<LocalId>(n_owned + t)};
+  std::sort(ids.ghost_sorted.begin(), ids.ghost_sorted.end());
+  return ids;
+}
+
+// Step 5: the CSR in local order, neighbours in global-id order, with the
+// edges' values.
+void fill_csr(const OwnedLists& L, const std::vector<std::int64_t>& order, const LocalIds& ids,
+              const std::vector<int>& owner, int rank, const std::vector<double>& mine_vals, int width,
+              std::vector<std::int64_t>& offsets, std::vector<LocalId>& adjacency, std::vector<double>& values) {
+  offsets.assign(L.owned.size() + 1, 0);
+  adjacency.resize(L.entries.size());
+  values.resize(L.entries.size() * width);
   std::int64_t pos = 0;
   for (std::size_t l = 0; l < order.size(); ++l) {
     const auto v = order[l];
-    for (auto k = cnt[v]; k < cnt[v + 1]; ++k, ++pos) {
-      adjacency_[pos] = to_local(entries[k].nbr);
-      for (int c = 0; c < width; ++c) edge_values_[pos * width + c] = mine_vals[entries[k].src * width + c];
+    for (auto k = L.cnt[v]; k < L.cnt[v + 1]; ++k, ++pos) {
+      const GlobalId g = L.entries[k].nbr;
+      adjacency[pos] = owner[g] == rank ? ids.owned_to_local[L.index(g)] : ids.ghost(g);
+      for (int c = 0; c < width; ++c) values[pos * width + c] = mine_vals[L.entries[k].src * width + c];
     }
-    offsets_[l + 1] = pos;
+    offsets[l + 1] = pos;
   }
+}
 
-  phase_done("csr");
-  // 5. Halo plan: tell each owner which of its nodes we need, in our ghost order.
+// Step 6: the halo plan. Each owner is told which of its nodes we need, in
+// our ghost order (one all-to-all of the request lists); what the others ask
+// of us becomes our send lists.
+HaloPlan make_halo(MPI_Comm comm, const std::vector<int>& owner, const std::vector<GlobalId>& ghosts,
+                   const OwnedLists& L, const LocalIds& ids, int halo_width) {
+  const int size = comm_size(comm);
   std::vector<std::vector<GlobalId>> requests(size);
   for (GlobalId g : ghosts) requests[owner[g]].push_back(g);
   std::vector<int> nbr_ranks;
@@ -421,33 +532,55 @@ DistGraph::DistGraph(MPI_Comm comm, GlobalId n, const std::vector<int>& owner, c
     recv_count.push_back(static_cast<LocalId>(requests[r].size()));
     off += static_cast<LocalId>(requests[r].size());
   }
-  // Who asks us, and for what: one all-to-all of the request lists.
-  std::vector<std::vector<GlobalId>> tagged(size);
+  std::vector<std::vector<GlobalId>> tagged(size);  // per rank: count, then the ids
   for (int r = 0; r < size; ++r) {
     tagged[r].reserve(requests[r].size() + 1);
     tagged[r].push_back(static_cast<GlobalId>(requests[r].size()));
     tagged[r].insert(tagged[r].end(), requests[r].begin(), requests[r].end());
   }
-  std::vector<GlobalId> asked = exchange_records(comm, tagged);
+  const std::vector<GlobalId> asked = exchange_records(comm, tagged);
   std::vector<std::vector<LocalId>> send_ids;
   std::vector<int> senders;  // ranks that asked us, in rank order
-  {
-    std::size_t p = 0;
-    for (int r = 0; r < size; ++r) {
-      const auto k = static_cast<std::size_t>(asked[p++]);
-      if (k > 0) {
-        std::vector<LocalId> ids(k);
-        for (std::size_t t = 0; t < k; ++t) ids[t] = owned_to_local[owned_index(asked[p + t])];
-        senders.push_back(r);
-        send_ids.push_back(std::move(ids));
-      }
-      p += k;
+  std::size_t p = 0;
+  for (int r = 0; r < size; ++r) {
+    const auto k = static_cast<std::size_t>(asked[p++]);
+    if (k > 0) {
+      std::vector<LocalId> sids(k);
+      for (std::size_t t = 0; t < k; ++t) sids[t] = ids.owned_to_local[L.index(asked[p + t])];
+      senders.push_back(r);
+      send_ids.push_back(std::move(sids));
     }
+    p += k;
   }
   // The graph is undirected, so the ranks we receive from are those we send to.
   if (senders != nbr_ranks) throw Error("internal error: asymmetric halo (edges not symmetric?)");
-  halo_ = HaloPlan(comm, n_owned_, nbr_ranks, std::move(send_ids), recv_offset, recv_count, halo_width);
-  phase_done("halo");
+  return HaloPlan(comm, static_cast<LocalId>(L.owned.size()), nbr_ranks, std::move(send_ids), recv_offset,
+                  recv_count, halo_width);
+}
+
+}  // namespace
+
+DistGraph::DistGraph(MPI_Comm comm, GlobalId n, const std::vector<int>& owner, const std::vector<GlobalId>& edges,
+                     const std::vector<double>& edge_values, int width, int halo_width, LocalOrdering ordering)
+    : comm_(comm), n_global_(n), width_(width) {
+  const MPI_Comm gc = comm_.get();  // the graph's own duplicate (halo traffic apart from the caller's)
+  const int rank = comm_rank(gc);
+  PhaseClock clock(build_phases_);
+  std::vector<EdgeRec> mine;
+  std::vector<double> mine_vals;
+  route_edges(gc, owner, edges, edge_values, width, mine, mine_vals);
+  clock.done("exchange");
+  const OwnedLists lists = neighbour_lists(n, owner, rank, mine);
+  clock.done("lists");
+  const std::vector<std::int64_t> order = local_order(lists, ordering, n_interior_);
+  clock.done("order");
+  n_owned_ = static_cast<LocalId>(lists.owned.size());
+  const std::vector<GlobalId> ghosts = ghost_nodes(lists, owner, rank);
+  const LocalIds ids = number_nodes(lists, order, ghosts, local_to_global_, owned_sorted_);
+  fill_csr(lists, order, ids, owner, rank, mine_vals, width, offsets_, adjacency_, edge_values_);
+  clock.done("csr");
+  halo_ = make_halo(gc, owner, ghosts, lists, ids, halo_width);
+  clock.done("halo");
 }
 
 std::int64_t DistGraph::memory_bytes() const {
@@ -467,7 +600,7 @@ LocalId DistGraph::max_degree() const {
   LocalId d = 0;
   for (LocalId v = 0; v < n_owned_; ++v) d = std::max(d, degree(v));
   LocalId g = 0;
-  MPI_Allreduce(&d, &g, 1, MPI_INT32_T, MPI_MAX, comm_);
+  MPI_Allreduce(&d, &g, 1, MPI_INT32_T, MPI_MAX, comm_.get());
   return g;
 }
 

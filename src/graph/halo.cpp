@@ -7,6 +7,8 @@
 namespace snl {
 
 namespace {
+// The tag of every halo message; the plan's communicator is its graph's own
+// duplicate (DistGraph), so no other traffic can match it.
 constexpr int kHaloTag = 7401;
 }
 
@@ -54,12 +56,14 @@ HaloPlan& HaloPlan::operator=(HaloPlan&& o) noexcept {
     recv_buf_ = std::move(o.recv_buf_);
     requests_ = std::move(o.requests_);
     active_width_ = o.active_width_;
+    in_flight_ = o.in_flight_;
     messages_sent_ = o.messages_sent_;
     bytes_sent_ = o.bytes_sent_;
     wait_seconds_ = o.wait_seconds_;
     o.requests_.clear();
     o.neighbors_.clear();
     o.active_width_ = 0;
+    o.in_flight_ = false;
   }
   return *this;
 }
@@ -89,7 +93,11 @@ void HaloPlan::make_requests(int width) {
 }
 
 void HaloPlan::begin(const double* field, int width) {
+  // One exchange at a time: the buffers and requests are the plan's own, and a
+  // second begin() would restart requests that are still active.
+  if (in_flight_) throw Error("halo exchange: begin() called while an exchange is in flight (end() it first)");
   if (width < 1 || width > max_width_) throw Error("halo exchange width out of range");
+  in_flight_ = true;
   if (neighbors_.empty()) return;
   auto& set = requests_[width - 1];
   if (set.empty()) make_requests(width);
@@ -107,6 +115,8 @@ void HaloPlan::begin(const double* field, int width) {
 }
 
 void HaloPlan::end(double* field, int width) {
+  if (!in_flight_) throw Error("halo exchange: end() called without a matching begin()");
+  in_flight_ = false;
   if (neighbors_.empty()) return;
   if (width != active_width_) throw Error("halo end() width differs from begin()");
   auto& set = requests_[width - 1];

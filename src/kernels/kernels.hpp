@@ -9,6 +9,12 @@
 // for bit. The SIMD kernels serve p = 2 and p = 3; the scalar twins are the
 // portable path and what the tests compare the SIMD paths against.
 // docs/performance.md has the measurements behind this layout.
+//
+// This header is the interface the solvers use. The implementation is split
+// by concern: lanes.cpp (NodeLanes), level_plan.cpp (LevelPlan; run_levels
+// is below), dispatch.cpp (CPU detection, SNL_SIMD, relax_chunks/mm_chunks),
+// scalar.cpp, avx2.cpp, avx512.cpp (the kernels of each instruction set),
+// with terms.hpp and simd_common.hpp as their private headers.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>

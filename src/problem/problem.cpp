@@ -42,6 +42,118 @@ int slab_holder(const std::vector<GlobalId>& starts, GlobalId g) {
   return static_cast<int>(std::upper_bound(starts.begin(), starts.end(), g) - starts.begin()) - 1;
 }
 
+// Seconds of the setup phases (ProblemReport::setup_phases): done(name)
+// records the time since the previous mark.
+class SetupClock {
+ public:
+  explicit SetupClock(std::vector<std::pair<std::string, double>>& out) : out_(out), mark_(MPI_Wtime()) {}
+  void done(const std::string& name) {
+    const double now = MPI_Wtime();
+    out_.emplace_back(name, now - mark_);
+    mark_ = now;
+  }
+
+ private:
+  std::vector<std::pair<std::string, double>>& out_;
+  double mark_;
+};
+
+// The measurements after step 1: flat (i, j) / (i, k) pairs with their ranges.
+struct Measurements {
+  std::vector<GlobalId> sedges, aedges;
+  std::vector<double> sranges, aranges;
+};
+
+// Step 1: merge duplicates. Every measurement goes to the block owner of its
+// smaller sensor id, where all copies of a pair meet; rep gets the counts.
+Measurements merge_measurements(MPI_Comm comm, const Network& slab, ProblemReport& rep) {
+  const int size = comm_size(comm);
+  const GlobalId n = slab.num_sensors;
+  Measurements m;
+  std::vector<std::vector<SensorEdgeRec>> out(size);
+  for (GlobalId e = 0; e < slab.local_sensor_edges(); ++e) {
+    GlobalId a = slab.sensor_edges[2 * e], b = slab.sensor_edges[2 * e + 1];
+    if (a > b) std::swap(a, b);
+    out[block_owner(n, size, a)].push_back({a, b, slab.sensor_ranges[e]});
+  }
+  auto got = exchange_records(comm, out);
+  test_fail_point("alloc");  // fault-injection tests: one rank runs out of memory between collectives
+  m.sedges.reserve(2 * got.size());
+  m.sranges.reserve(got.size());
+  for (const auto& r : got) {
+    m.sedges.push_back(r.i);
+    m.sedges.push_back(r.j);
+    m.sranges.push_back(r.r);
+  }
+  std::vector<std::vector<AnchorEdgeRec>> aout(size);
+  for (GlobalId e = 0; e < slab.local_anchor_edges(); ++e) {
+    const GlobalId i = slab.anchor_edges[2 * e];
+    aout[block_owner(n, size, i)].push_back({i, slab.anchor_edges[2 * e + 1], slab.anchor_ranges[e]});
+  }
+  auto agot = exchange_records(comm, aout);
+  m.aedges.reserve(2 * agot.size());
+  m.aranges.reserve(agot.size());
+  for (const auto& r : agot) {
+    m.aedges.push_back(r.i);
+    m.aedges.push_back(r.k);
+    m.aranges.push_back(r.r);
+  }
+  MergeStats local = merge_duplicates(m.sedges, m.sranges, m.aedges, m.aranges);
+  long long in[4] = {local.merged_sensor_pairs, local.merged_anchor_pairs, static_cast<long long>(m.sranges.size()),
+                     static_cast<long long>(m.aranges.size())},
+            sum[4];
+  MPI_Allreduce(in, sum, 4, MPI_LONG_LONG, MPI_SUM, comm);
+  rep.merged.merged_sensor_pairs = sum[0];
+  rep.merged.merged_anchor_pairs = sum[1];
+  rep.num_sensor_edges = sum[2];
+  rep.num_anchor_edges = sum[3];
+  return m;
+}
+
+// Step 2: connectivity and anchoring on rank 0 (union-find over all edges):
+// per global sensor, 1 if its component has no anchor measurement; on every rank.
+std::vector<std::uint8_t> unanchored_flags(MPI_Comm comm, GlobalId n, const Measurements& m) {
+  std::vector<GlobalId> all = gather_to_root(comm, m.sedges);
+  std::vector<GlobalId> anchored_ids;
+  for (std::size_t e = 0; e < m.aedges.size(); e += 2) anchored_ids.push_back(m.aedges[e]);
+  std::vector<GlobalId> all_anchored = gather_to_root(comm, anchored_ids);
+  std::vector<std::uint8_t> unanchored(static_cast<std::size_t>(n), 0);
+  if (comm_rank(comm) == 0) {
+    DisjointSets ds(n);
+    for (std::size_t e = 0; e < all.size(); e += 2) ds.unite(all[e], all[e + 1]);
+    std::vector<std::uint8_t> root_anchored(static_cast<std::size_t>(n), 0);
+    for (GlobalId i : all_anchored) root_anchored[ds.find(i)] = 1;
+    for (GlobalId i = 0; i < n; ++i) unanchored[i] = root_anchored[ds.find(i)] ? 0 : 1;
+  }
+  bcast_bytes(comm, unanchored.data(), unanchored.size());
+  return unanchored;
+}
+
+// Total and largest ghost count over the ranks, into the partition report.
+void count_ghosts(MPI_Comm comm, const DistGraph& graph, PartitionStats& stats) {
+  long long g = graph.num_ghosts(), gs = 0, gm = 0;
+  MPI_Allreduce(&g, &gs, 1, MPI_LONG_LONG, MPI_SUM, comm);
+  MPI_Allreduce(&g, &gm, 1, MPI_LONG_LONG, MPI_MAX, comm);
+  stats.total_ghosts = gs;
+  stats.max_ghosts = gm;
+}
+
+// The smallest 20 global ids of flagged sensors over all ranks (on every rank).
+std::vector<GlobalId> flagged_sample(MPI_Comm comm, const DistGraph& graph, const std::vector<std::uint8_t>& flags) {
+  std::vector<GlobalId> bad;
+  for (LocalId v = 0; v < graph.num_owned() && bad.size() < 20; ++v)
+    if (flags[v]) bad.push_back(graph.global_id(v));
+  std::sort(bad.begin(), bad.end());
+  auto all_bad = gather_to_root(comm, bad);
+  std::sort(all_bad.begin(), all_bad.end());
+  if (all_bad.size() > 20) all_bad.resize(20);
+  long long k = static_cast<long long>(all_bad.size());
+  MPI_Bcast(&k, 1, MPI_LONG_LONG, 0, comm);
+  all_bad.resize(static_cast<std::size_t>(k));
+  MPI_Bcast(all_bad.data(), static_cast<int>(k), MPI_INT64_T, 0, comm);
+  return all_bad;
+}
+
 }  // namespace
 
 // The body runs collectives from start to end: a failure that only some ranks
@@ -55,146 +167,88 @@ LocalizationProblem::LocalizationProblem(MPI_Comm comm, const Network& slab, Par
 
 void LocalizationProblem::build(MPI_Comm comm, const Network& slab, PartitionMethod method, ProblemReport* report) {
   test_fail_point("setup");  // fault-injection tests: one rank fails before the first collective
-  const int size = comm_size(comm);
   const GlobalId n = slab.num_sensors;
-  const int p = dim_;
   ProblemReport rep;
-  double tmark = MPI_Wtime();
-  auto phase_done = [&](const std::string& name) {
-    const double now = MPI_Wtime();
-    rep.setup_phases.emplace_back(name, now - tmark);
-    tmark = now;
-  };
-
-  // 1. Merge duplicates: route every measurement to the block owner of its
-  //    smaller sensor id, where all copies of a pair meet.
-  std::vector<GlobalId> sedges, aedges;
-  std::vector<double> sranges, aranges;
-  {
-    std::vector<std::vector<SensorEdgeRec>> out(size);
-    for (GlobalId e = 0; e < slab.local_sensor_edges(); ++e) {
-      GlobalId a = slab.sensor_edges[2 * e], b = slab.sensor_edges[2 * e + 1];
-      if (a > b) std::swap(a, b);
-      out[block_owner(n, size, a)].push_back({a, b, slab.sensor_ranges[e]});
-    }
-    auto got = exchange_records(comm, out);
-    test_fail_point("alloc");  // fault-injection tests: one rank runs out of memory between collectives
-    sedges.reserve(2 * got.size());
-    sranges.reserve(got.size());
-    for (const auto& r : got) {
-      sedges.push_back(r.i);
-      sedges.push_back(r.j);
-      sranges.push_back(r.r);
-    }
-    std::vector<std::vector<AnchorEdgeRec>> aout(size);
-    for (GlobalId e = 0; e < slab.local_anchor_edges(); ++e) {
-      const GlobalId i = slab.anchor_edges[2 * e];
-      aout[block_owner(n, size, i)].push_back({i, slab.anchor_edges[2 * e + 1], slab.anchor_ranges[e]});
-    }
-    auto agot = exchange_records(comm, aout);
-    aedges.reserve(2 * agot.size());
-    aranges.reserve(agot.size());
-    for (const auto& r : agot) {
-      aedges.push_back(r.i);
-      aedges.push_back(r.k);
-      aranges.push_back(r.r);
-    }
-    MergeStats local = merge_duplicates(sedges, sranges, aedges, aranges);
-    long long in[4] = {local.merged_sensor_pairs, local.merged_anchor_pairs,
-                       static_cast<long long>(sranges.size()), static_cast<long long>(aranges.size())},
-              sum[4];
-    MPI_Allreduce(in, sum, 4, MPI_LONG_LONG, MPI_SUM, comm);
-    rep.merged.merged_sensor_pairs = sum[0];
-    rep.merged.merged_anchor_pairs = sum[1];
-    rep.num_sensor_edges = sum[2];
-    rep.num_anchor_edges = sum[3];
-  }
-
-  phase_done("merge");
-  // 2. Connectivity and anchoring on rank 0 (union-find over all edges).
-  std::vector<std::uint8_t> unanchored_flag;  // [n] on every rank, filled below
-  {
-    std::vector<GlobalId> all = gather_to_root(comm, sedges);
-    std::vector<GlobalId> anchored_ids;
-    for (std::size_t e = 0; e < aedges.size(); e += 2) anchored_ids.push_back(aedges[e]);
-    std::vector<GlobalId> all_anchored = gather_to_root(comm, anchored_ids);
-    unanchored_flag.assign(static_cast<std::size_t>(n), 0);
-    if (comm_rank(comm) == 0) {
-      DisjointSets ds(n);
-      for (std::size_t e = 0; e < all.size(); e += 2) ds.unite(all[e], all[e + 1]);
-      std::vector<std::uint8_t> root_anchored(static_cast<std::size_t>(n), 0);
-      for (GlobalId i : all_anchored) root_anchored[ds.find(i)] = 1;
-      for (GlobalId i = 0; i < n; ++i) unanchored_flag[i] = root_anchored[ds.find(i)] ? 0 : 1;
-    }
-    bcast_bytes(comm, unanchored_flag.data(), unanchored_flag.size());
-  }
-
+  SetupClock clock(rep.setup_phases);
+  Measurements m = merge_measurements(comm, slab, rep);
+  clock.done("merge");
+  const std::vector<std::uint8_t> unanchored = unanchored_flags(comm, n, m);
+  clock.done("connectivity");
   // 3. Partition and distribute the sensor graph; ranges ride along as edge data.
-  phase_done("connectivity");
-  std::vector<int> owner = partition_graph(comm, n, sedges, method, &rep.partition);
-  phase_done("partition");
+  const std::vector<int> owner = partition_graph(comm, n, m.sedges, method, &rep.partition);
+  clock.done("partition");
   for (const auto& ph : rep.partition.phases) rep.setup_phases.emplace_back("partition." + ph.first, ph.second);
-  graph_ = DistGraph(comm, n, owner, sedges, sranges, 1, std::max(p, 2));
-  phase_done("graph");
+  graph_ = DistGraph(comm, n, owner, m.sedges, m.sranges, 1, std::max(dim_, 2));
+  clock.done("graph");
   for (const auto& ph : graph_.build_phases()) rep.setup_phases.emplace_back("graph." + ph.first, ph.second);
-  sedges.clear();
-  sedges.shrink_to_fit();
-  sranges.clear();
-  sranges.shrink_to_fit();
-  {
-    long long g = graph_.num_ghosts(), gs = 0, gm = 0;
-    MPI_Allreduce(&g, &gs, 1, MPI_LONG_LONG, MPI_SUM, comm);
-    MPI_Allreduce(&g, &gm, 1, MPI_LONG_LONG, MPI_MAX, comm);
-    rep.partition.total_ghosts = gs;
-    rep.partition.max_ghosts = gm;
-  }
+  m.sedges.clear();
+  m.sedges.shrink_to_fit();
+  m.sranges.clear();
+  m.sranges.shrink_to_fit();
+  count_ghosts(comm, graph_, rep.partition);
+  distribute_anchors(comm, owner, m.aedges, m.aranges);
+  read_owned_rows(comm, slab);
+  flag_sensors(comm, unanchored, rep);
+  delta_max_ = graph_.max_degree();
+  clock.done("anchors_flags");
+  if (report) *report = rep;
+}
 
-  // 4. Anchor measurements to the owners of their sensors, sorted by anchor id.
+// Step 4: anchor measurements to the owners of their sensors, sorted by
+// (local sensor, anchor id).
+void LocalizationProblem::distribute_anchors(MPI_Comm comm, const std::vector<int>& owner,
+                                             const std::vector<GlobalId>& aedges, const std::vector<double>& aranges) {
   const LocalId n_owned = graph_.num_owned();
-  {
-    std::vector<std::vector<AnchorEdgeRec>> out(size);
-    for (std::size_t e = 0; 2 * e < aedges.size(); ++e)
-      out[owner[aedges[2 * e]]].push_back({aedges[2 * e], aedges[2 * e + 1], aranges[e]});
-    auto got = exchange_records(comm, out);
-    std::vector<std::pair<LocalId, std::size_t>> keyed(got.size());
-    for (std::size_t t = 0; t < got.size(); ++t) keyed[t] = {graph_.owned_local(got[t].i), t};
-    std::sort(keyed.begin(), keyed.end(), [&](const auto& x, const auto& y) {
-      return x.first != y.first ? x.first < y.first : got[x.second].k < got[y.second].k;
-    });
-    anchor_offsets_.assign(static_cast<std::size_t>(n_owned) + 1, 0);
-    anchor_ids_.resize(got.size());
-    anchor_ranges_.resize(got.size());
-    for (std::size_t t = 0; t < keyed.size(); ++t) {
-      const auto& r = got[keyed[t].second];
-      ++anchor_offsets_[keyed[t].first + 1];
-      anchor_ids_[t] = static_cast<std::int32_t>(r.k);
-      anchor_ranges_[t] = r.r;
-    }
-    for (LocalId v = 0; v < n_owned; ++v) anchor_offsets_[v + 1] += anchor_offsets_[v];
+  std::vector<std::vector<AnchorEdgeRec>> out(comm_size(comm));
+  for (std::size_t e = 0; 2 * e < aedges.size(); ++e)
+    out[owner[aedges[2 * e]]].push_back({aedges[2 * e], aedges[2 * e + 1], aranges[e]});
+  auto got = exchange_records(comm, out);
+  std::vector<std::pair<LocalId, std::size_t>> keyed(got.size());
+  for (std::size_t t = 0; t < got.size(); ++t) keyed[t] = {graph_.owned_local(got[t].i), t};
+  std::sort(keyed.begin(), keyed.end(), [&](const auto& x, const auto& y) {
+    return x.first != y.first ? x.first < y.first : got[x.second].k < got[y.second].k;
+  });
+  anchor_offsets_.assign(static_cast<std::size_t>(n_owned) + 1, 0);
+  anchor_ids_.resize(got.size());
+  anchor_ranges_.resize(got.size());
+  for (std::size_t t = 0; t < keyed.size(); ++t) {
+    const auto& r = got[keyed[t].second];
+    ++anchor_offsets_[keyed[t].first + 1];
+    anchor_ids_[t] = static_cast<std::int32_t>(r.k);
+    anchor_ranges_[t] = r.r;
   }
+  for (LocalId v = 0; v < n_owned; ++v) anchor_offsets_[v + 1] += anchor_offsets_[v];
+}
 
-  // 5. Truth and the file's localizability flags to the owners.
-  if (has_truth_) truth_ = file_rows_to_owned(slab.truth, slab.sensor_row_offset, p);
+// Step 5: truth and the file's localizability flags to the owners.
+void LocalizationProblem::read_owned_rows(MPI_Comm comm, const Network& slab) {
+  const LocalId n_owned = graph_.num_owned();
+  if (has_truth_) truth_ = file_rows_to_owned(slab.truth, slab.sensor_row_offset, dim_);
   flags_.assign(static_cast<std::size_t>(n_owned), 0);
-  {
-    int file_has_flags = slab.localizability.empty() ? 0 : 1, any = 0;
-    MPI_Allreduce(&file_has_flags, &any, 1, MPI_INT, MPI_MAX, comm);
-    if (any) {
-      std::vector<double> f(slab.localizability.begin(), slab.localizability.end());
-      auto owned_f = file_rows_to_owned(f, slab.sensor_row_offset, 1);
-      for (LocalId v = 0; v < n_owned; ++v) flags_[v] = static_cast<std::uint8_t>(owned_f[v]);
-    }
+  int file_has_flags = slab.localizability.empty() ? 0 : 1, any = 0;
+  MPI_Allreduce(&file_has_flags, &any, 1, MPI_INT, MPI_MAX, comm);
+  if (any) {
+    std::vector<double> f(slab.localizability.begin(), slab.localizability.end());
+    auto owned_f = file_rows_to_owned(f, slab.sensor_row_offset, 1);
+    for (LocalId v = 0; v < n_owned; ++v) flags_[v] = static_cast<std::uint8_t>(owned_f[v]);
   }
+}
+
+// Step 6: flags of sensors that cannot be localized (no anchored component,
+// fewer than p + 1 measurements), their counts and a sample into rep, and
+// the largest anchor degree.
+void LocalizationProblem::flag_sensors(MPI_Comm comm, const std::vector<std::uint8_t>& unanchored,
+                                       ProblemReport& rep) {
   long long cnt[3] = {0, 0, 0};
   int maxa = 0;
-  for (LocalId v = 0; v < n_owned; ++v) {
+  for (LocalId v = 0; v < graph_.num_owned(); ++v) {
     const auto na = anchor_offsets_[v + 1] - anchor_offsets_[v];
     maxa = std::max(maxa, static_cast<int>(na));
-    if (unanchored_flag[graph_.global_id(v)]) {
+    if (unanchored[graph_.global_id(v)]) {
       flags_[v] |= kUnanchoredComponent;
       ++cnt[0];
     }
-    if (graph_.degree(v) + na < p + 1) {
+    if (graph_.degree(v) + na < dim_ + 1) {
       flags_[v] |= kFewMeasurements;
       ++cnt[1];
     }
@@ -205,24 +259,8 @@ void LocalizationProblem::build(MPI_Comm comm, const Network& slab, PartitionMet
   rep.unanchored = tot[0];
   rep.few_measurements = tot[1];
   rep.unlocalizable = tot[2];
-  {
-    std::vector<GlobalId> bad;
-    for (LocalId v = 0; v < n_owned && bad.size() < 20; ++v)
-      if (flags_[v]) bad.push_back(graph_.global_id(v));
-    std::sort(bad.begin(), bad.end());
-    auto all_bad = gather_to_root(comm, bad);
-    std::sort(all_bad.begin(), all_bad.end());
-    if (all_bad.size() > 20) all_bad.resize(20);
-    long long k = static_cast<long long>(all_bad.size());
-    MPI_Bcast(&k, 1, MPI_LONG_LONG, 0, comm);
-    all_bad.resize(static_cast<std::size_t>(k));
-    MPI_Bcast(all_bad.data(), static_cast<int>(k), MPI_INT64_T, 0, comm);
-    rep.unlocalizable_sample = all_bad;
-  }
-  delta_max_ = graph_.max_degree();
+  rep.unlocalizable_sample = flagged_sample(comm, graph_, flags_);
   MPI_Allreduce(&maxa, &max_anchor_deg_, 1, MPI_INT, MPI_MAX, comm);
-  phase_done("anchors_flags");
-  if (report) *report = rep;
 }
 
 std::int64_t LocalizationProblem::memory_bytes() const {

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <new>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "snl/core/common.hpp"
@@ -14,6 +15,29 @@ namespace snl {
 
 int comm_rank(MPI_Comm comm);
 int comm_size(MPI_Comm comm);
+
+/// A private duplicate of a communicator (MPI_Comm_dup, as PetscCommDuplicate
+/// does), freed once by its owner: messages an object sends on it cannot match
+/// the caller's traffic on the original, whatever the tags. Move-only; a move
+/// swaps, so the duplicate is freed exactly once by whoever ends up with it.
+class DupComm {
+ public:
+  DupComm() = default;
+  /// Collective over comm.
+  explicit DupComm(MPI_Comm comm);
+  ~DupComm();
+  DupComm(const DupComm&) = delete;
+  DupComm& operator=(const DupComm&) = delete;
+  DupComm(DupComm&& o) noexcept { std::swap(comm_, o.comm_); }
+  DupComm& operator=(DupComm&& o) noexcept {
+    std::swap(comm_, o.comm_);
+    return *this;
+  }
+  MPI_Comm get() const { return comm_; }
+
+ private:
+  MPI_Comm comm_ = MPI_COMM_NULL;
+};
 
 /// Collective. If any rank passes a non-empty message, every rank throws
 /// snl::Error carrying the message of the lowest such rank.

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "snl/core/common.hpp"
+#include "snl/core/mpi_util.hpp"
 #include "snl/graph/halo.hpp"
 
 namespace snl {
@@ -55,7 +56,8 @@ LocalOrdering default_local_ordering();
 class DistGraph {
  public:
   DistGraph() = default;
-  /// Collective. `owner`: owner rank of every global node. `edges`: this
+  /// Collective. Duplicates `comm` once (freed by the destructor).
+  /// `owner`: owner rank of every global node. `edges`: this
   /// rank's share of the undirected edges (global pairs, each edge once
   /// overall, any rank may hold any edge), with `width` doubles of data each
   /// in `edge_values`. `halo_width`: most doubles per node the halo carries.
@@ -63,7 +65,10 @@ class DistGraph {
             const std::vector<double>& edge_values, int width, int halo_width,
             LocalOrdering ordering = default_local_ordering());
 
-  MPI_Comm comm() const { return comm_; }
+  /// The graph's own duplicate of the constructor's communicator (congruent
+  /// to it, never the same handle): the halo exchange and the clients'
+  /// collectives run on it, apart from the caller's traffic.
+  MPI_Comm comm() const { return comm_.get(); }
   GlobalId num_global() const { return n_global_; }
   LocalId num_owned() const { return n_owned_; }
   /// Owned nodes [0, num_interior()) have no ghost neighbour.
@@ -101,7 +106,9 @@ class DistGraph {
   LocalId owned_local(GlobalId g) const;
 
  private:
-  MPI_Comm comm_ = MPI_COMM_NULL;
+  // Declared first, so destroyed last: the halo's requests are freed before
+  // the communicator they live on.
+  DupComm comm_;
   GlobalId n_global_ = 0;
   LocalId n_owned_ = 0, n_interior_ = 0;
   int width_ = 0;

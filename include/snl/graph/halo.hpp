@@ -15,7 +15,9 @@ namespace snl {
 class HaloPlan {
  public:
   HaloPlan() = default;
-  /// neighbor_ranks: ranks we exchange with (sorted). send_ids[r]: owned local
+  /// comm: the communicator of the messages, used as it is (not freed; the
+  /// owning DistGraph passes its own duplicate). neighbor_ranks: ranks we
+  /// exchange with (sorted). send_ids[r]: owned local
   /// ids whose values go to neighbor_ranks[r], in the receiver's ghost order.
   /// recv_offset[r], recv_count[r]: ghost slots [n_owned + offset, +count) that
   /// neighbor_ranks[r] fills. max_width: most doubles per node ever exchanged.
@@ -29,10 +31,14 @@ class HaloPlan {
   HaloPlan& operator=(HaloPlan&& o) noexcept;
 
   /// Packs the owned rows of `field` (row-major, `width` doubles per local
-  /// node) and starts the sends and receives.
+  /// node) and starts the sends and receives. One exchange at a time: throws
+  /// snl::Error while one is in flight (begin() without its end()).
   void begin(const double* field, int width);
-  /// Completes the exchange and writes the ghost rows of `field`.
+  /// Completes the exchange and writes the ghost rows of `field`. Throws
+  /// snl::Error without a begin() before it.
   void end(double* field, int width);
+  /// Whether begin() has run without its end().
+  bool in_flight() const { return in_flight_; }
   /// begin + end.
   void exchange(double* field, int width) {
     begin(field, width);
@@ -73,6 +79,7 @@ class HaloPlan {
   // Persistent requests per width (index width-1), created on first use.
   std::vector<std::vector<MPI_Request>> requests_;
   int active_width_ = 0;
+  bool in_flight_ = false;
   std::int64_t messages_sent_ = 0, bytes_sent_ = 0;
   double wait_seconds_ = 0;
 };

@@ -75,7 +75,12 @@ class LocalizationProblem {
   std::vector<double> owned_to_file_rows(const double* owned, int width, GlobalId* row_offset) const;
 
  private:
+  // The constructor's steps (problem.cpp), in this order.
   void build(MPI_Comm comm, const Network& slab, PartitionMethod method, ProblemReport* report);
+  void distribute_anchors(MPI_Comm comm, const std::vector<int>& owner, const std::vector<GlobalId>& aedges,
+                          const std::vector<double>& aranges);
+  void read_owned_rows(MPI_Comm comm, const Network& slab);
+  void flag_sensors(MPI_Comm comm, const std::vector<std::uint8_t>& unanchored, ProblemReport& rep);
   int dim_ = 2;
   DistGraph graph_;
   std::vector<double> anchors_;

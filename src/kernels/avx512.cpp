@@ -1,0 +1,212 @@
+#include "kernels/simd_common.hpp"
+#include "kernels/terms.hpp"
+
+#ifdef SNL_HAVE_AVX2_PATH
+
+namespace snl::detail {
+
+namespace {
+
+// ---- AVX-512: the same node-lane steps with 8 nodes per register. Lanes
+// hold nodes (0, 4, 1, 5, 2, 6, 3, 7) of the chunk (NodeLanes::lane_node).
+// A lane whose slot is inside its disk is left as it is by a masked add,
+// which is the scalar form's "+ (+0.0)" (the sum is never -0.0).
+#define SNL_AVX512 __attribute__((target("avx512f,avx512dq")))
+// GCC 12 warns about the intrinsics headers' own deliberately undefined
+// registers (_mm512_undefined_pd) once they are inlined here.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wuninitialized"
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+
+// Rows idx[0..7] of x (p = P) as P registers in lane order (0, 4, 1, 5, ...).
+template <int P>
+SNL_AVX512 inline void load_rows8(const double* x, const LocalId* idx, __m512d* U) {
+  auto row = [&](int q) { return _mm_loadu_pd(x + std::size_t(idx[q]) * P); };
+  __m512d a = _mm512_castpd128_pd512(row(0)), b = _mm512_castpd128_pd512(row(4));
+  a = _mm512_insertf64x2(a, row(1), 1);
+  b = _mm512_insertf64x2(b, row(5), 1);
+  a = _mm512_insertf64x2(a, row(2), 2);
+  b = _mm512_insertf64x2(b, row(6), 2);
+  a = _mm512_insertf64x2(a, row(3), 3);
+  b = _mm512_insertf64x2(b, row(7), 3);
+  U[0] = _mm512_unpacklo_pd(a, b);
+  U[1] = _mm512_unpackhi_pd(a, b);
+  if constexpr (P == 3) {
+    auto z = [&](int q) { return _mm_load_sd(x + std::size_t(idx[q]) * 3 + 2); };
+    __m512d c = _mm512_castpd128_pd512(z(0)), d = _mm512_castpd128_pd512(z(4));
+    c = _mm512_insertf64x2(c, z(1), 1);
+    d = _mm512_insertf64x2(d, z(5), 1);
+    c = _mm512_insertf64x2(c, z(2), 2);
+    d = _mm512_insertf64x2(d, z(6), 2);
+    c = _mm512_insertf64x2(c, z(3), 3);
+    d = _mm512_insertf64x2(d, z(7), 3);
+    U[2] = _mm512_unpacklo_pd(c, d);
+  }
+}
+
+// load_own with 8 lanes.
+template <int P>
+SNL_AVX512 inline void load_own8(const double* r, __m512d* U) {
+  if constexpr (P == 2) {
+    const __m512d a = _mm512_loadu_pd(r), b = _mm512_loadu_pd(r + 8);
+    U[0] = _mm512_unpacklo_pd(a, b);
+    U[1] = _mm512_unpackhi_pd(a, b);
+  } else {
+    load_rows8<P>(r, kIota, U);
+  }
+}
+
+// The inverse of load_own8; non-temporal stores for p = 2 only (see store_own).
+template <int P>
+SNL_AVX512 inline void store_own8(double* t, const __m512d* U, bool stream) {
+  if constexpr (P == 2) {
+    const __m512d lo = _mm512_unpacklo_pd(U[0], U[1]), hi = _mm512_unpackhi_pd(U[0], U[1]);
+    if (stream) {
+      _mm_stream_pd(t, _mm512_castpd512_pd128(lo));
+      _mm_stream_pd(t + 2, _mm512_extractf64x2_pd(lo, 1));
+      _mm_stream_pd(t + 4, _mm512_extractf64x2_pd(lo, 2));
+      _mm_stream_pd(t + 6, _mm512_extractf64x2_pd(lo, 3));
+      _mm_stream_pd(t + 8, _mm512_castpd512_pd128(hi));
+      _mm_stream_pd(t + 10, _mm512_extractf64x2_pd(hi, 1));
+      _mm_stream_pd(t + 12, _mm512_extractf64x2_pd(hi, 2));
+      _mm_stream_pd(t + 14, _mm512_extractf64x2_pd(hi, 3));
+    } else {
+      _mm512_storeu_pd(t, lo);      // nodes 0..3
+      _mm512_storeu_pd(t + 8, hi);  // nodes 4..7
+    }
+  } else {
+    alignas(64) double lanes[P][8];
+    for (int k = 0; k < P; ++k) _mm512_store_pd(lanes[k], U[k]);
+    rows_from_lanes(t, lanes);
+  }
+}
+
+// Lane sums <-> per-node-offset arrays.
+SNL_AVX512 inline __m512d load_lanes8(const double* q) {
+  return _mm512_permutexvar_pd(_mm512_setr_epi64(0, 4, 1, 5, 2, 6, 3, 7), _mm512_loadu_pd(q));
+}
+SNL_AVX512 inline void store_lanes8(double* q, __m512d v) {
+  _mm512_storeu_pd(q, _mm512_permutexvar_pd(_mm512_setr_epi64(0, 2, 4, 6, 1, 3, 5, 7), v));
+}
+
+// square_sum with 8 lanes.
+SNL_AVX512 inline __m512d square_sum8(const __m512d* U, int P) {
+  __m512d s = _mm512_mul_pd(U[0], U[0]);
+  for (int k = 1; k < P; ++k) s = _mm512_add_pd(s, _mm512_mul_pd(U[k], U[k]));
+  return s;
+}
+
+template <int P>
+SNL_AVX512 void relax_chunks_avx512(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0,
+                                    std::int64_t c1, const RelaxStep& s) {
+  const __m512d one = _mm512_set1_pd(1.0), vL = _mm512_set1_pd(s.L), vb = _mm512_set1_pd(s.beta);
+  __m512d DD = load_lanes8(s.norms), SS = load_lanes8(s.norms + 8), GS = load_lanes8(s.norms + 16);
+  const std::int64_t last = nl.groups() - 1;
+  for (std::int64_t c = c0; c < c1; ++c) {
+    const LocalId v0 = nl.first[c];
+    const std::size_t i0 = std::size_t(v0) * P;
+    __m512d W[P], A[P];
+    load_own8<P>(s.w + i0, W);
+    for (int k = 0; k < P; ++k) A[k] = _mm512_setzero_pd();
+    for (std::int64_t g = nl.group_off[c]; g < nl.group_off[c + 1]; ++g) {
+      prefetch_group<8, 0>(nl, g, last, nullptr);
+      prefetch_rows<8, P>(nl, g, last, s.w);
+      __m512d z[P];
+      load_rows8<P>(s.w, nl.adj.data() + 8 * g, z);
+      const __m512d r = _mm512_loadu_pd(nl.rho.data() + 8 * g);
+      for (int k = 0; k < P; ++k) z[k] = _mm512_sub_pd(W[k], z[k]);
+      const __m512d nz = _mm512_sqrt_pd(square_sum8(z, P));
+      const __mmask8 out = _mm512_cmp_pd_mask(nz, r, _CMP_GT_OQ);
+      const __m512d cf = _mm512_sub_pd(one, _mm512_div_pd(r, nz));
+      for (int k = 0; k < P; ++k) A[k] = _mm512_mask_add_pd(A[k], out, A[k], _mm512_mul_pd(cf, z[k]));
+    }
+    if (nl.has_anchor[c]) {
+      alignas(64) double tmp[8 * P];
+      store_own8<P>(tmp, A, false);
+      for (int q = 0; q < 8; ++q) add_anchor_disk_terms(prob, v0 + q, s.w + i0 + P * q, tmp + P * q);
+      load_own8<P>(tmp, A);
+    }
+    __m512d X[P], N[P], D[P], WN[P];
+    load_own8<P>(s.x + i0, X);
+    for (int k = 0; k < P; ++k) {
+      N[k] = _mm512_sub_pd(W[k], _mm512_div_pd(A[k], vL));
+      D[k] = _mm512_sub_pd(N[k], X[k]);
+      WN[k] = _mm512_add_pd(N[k], _mm512_mul_pd(vb, D[k]));
+    }
+    store_own8<P>(s.xn + i0, N, s.stream);
+    store_own8<P>(s.wn + i0, WN, s.stream);
+    for (int k = 0; k < P; ++k) DD = _mm512_add_pd(DD, _mm512_mul_pd(D[k], D[k]));
+    for (int k = 0; k < P; ++k) SS = _mm512_add_pd(SS, _mm512_mul_pd(N[k], N[k]));
+    for (int k = 0; k < P; ++k) GS = _mm512_add_pd(GS, _mm512_mul_pd(A[k], A[k]));
+  }
+  store_lanes8(s.norms, DD);
+  store_lanes8(s.norms + 8, SS);
+  store_lanes8(s.norms + 16, GS);
+  _mm_sfence();  // order the non-temporal stores before what follows
+}
+
+template <int P>
+SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0,
+                                 std::int64_t c1, const MMStep& s) {
+  const __m512d minus_one = _mm512_set1_pd(-1.0), zero = _mm512_setzero_pd();
+  const __m512d vkeep = _mm512_set1_pd(s.keep), vinvL = _mm512_set1_pd(s.invL);
+  __m512d DD = load_lanes8(s.norms), SS = load_lanes8(s.norms + 8);
+  const std::int64_t last = nl.groups() - 1;
+  for (std::int64_t c = c0; c < c1; ++c) {
+    const LocalId v0 = nl.first[c];
+    const std::size_t i0 = std::size_t(v0) * P;
+    __m512d V[P], A[P];
+    load_own8<P>(s.x + i0, V);
+    for (int k = 0; k < P; ++k) A[k] = _mm512_setzero_pd();
+    for (std::int64_t g = nl.group_off[c]; g < nl.group_off[c + 1]; ++g) {
+      prefetch_group<8, P>(nl, g, last, s.y);
+      prefetch_rows<8, P>(nl, g, last, s.x);
+      __m512d U[P], dz[P], yn[P];
+      load_rows8<P>(s.x, nl.adj.data() + 8 * g, U);
+      const __m512d r = _mm512_loadu_pd(nl.rho.data() + 8 * g);
+      const __mmask8 re = nl.real[g], fw = nl.fwd[g], bw = static_cast<__mmask8>(~fw);
+      double* yg = s.y + 8 * P * g;
+      for (int k = 0; k < P; ++k) {
+        dz[k] = _mm512_mask_sub_pd(_mm512_sub_pd(U[k], V[k]), fw, V[k], U[k]);
+        const __m512d Y = _mm512_loadu_pd(yg + 8 * k);
+        __m512d t = _mm512_sub_pd(dz[k], Y);
+        t = _mm512_mask_mul_pd(t, bw, t, minus_one);  // sgn (dz - y): 1.0 * t is t
+        A[k] = _mm512_mask_add_pd(A[k], re, A[k], t);
+        yn[k] = _mm512_add_pd(_mm512_mul_pd(vkeep, Y), _mm512_mul_pd(vinvL, dz[k]));
+      }
+      const __m512d nv = _mm512_sqrt_pd(square_sum8(yn, P));
+      const __mmask8 pos = _mm512_cmp_pd_mask(nv, zero, _CMP_GT_OQ);
+      const __m512d f = _mm512_div_pd(r, nv);
+      for (int k = 0; k < P; ++k)  // P_sphere(0) = rho e_1
+        _mm512_storeu_pd(yg + 8 * k, _mm512_mask_mul_pd(k == 0 ? r : zero, pos, yn[k], f));
+    }
+    if (nl.has_anchor[c]) {
+      alignas(64) double tmp[8 * P];
+      store_own8<P>(tmp, A, false);
+      for (int q = 0; q < 8; ++q)
+        add_anchor_mm_terms<P>(prob, v0 + q, s.x + i0 + P * q, s.keep, s.invL, s.aw, tmp + P * q);
+      load_own8<P>(tmp, A);
+    }
+    __m512d X[P], D[P];
+    for (int k = 0; k < P; ++k) {
+      X[k] = _mm512_sub_pd(V[k], _mm512_mul_pd(vinvL, A[k]));
+      D[k] = _mm512_sub_pd(X[k], V[k]);
+    }
+    store_own8<P>(s.xn + i0, X, s.stream);
+    for (int k = 0; k < P; ++k) DD = _mm512_add_pd(DD, _mm512_mul_pd(D[k], D[k]));
+    for (int k = 0; k < P; ++k) SS = _mm512_add_pd(SS, _mm512_mul_pd(X[k], X[k]));
+  }
+  store_lanes8(s.norms, DD);
+  store_lanes8(s.norms + 8, SS);
+  _mm_sfence();
+}
+
+}  // namespace
+
+const KernelTable kAvx512Kernels = {{relax_chunks_avx512<2>, relax_chunks_avx512<3>},
+                                    {mm_chunks_avx512<2>, mm_chunks_avx512<3>}};
+#pragma GCC diagnostic pop
+
+}  // namespace snl::detail
+
+#endif  // SNL_HAVE_AVX2_PATH
