@@ -35,7 +35,9 @@ log() { echo "[scaling] $*" >&2; }
 stream1=$(mpirun -np 1 "$BIN/stream_triad" 40000000 20 | awk '{print $2}')
 streamN=$(mpirun -np "$(nproc)" "$BIN/stream_triad" 40000000 20 | awk '{print $2}')
 log "STREAM triad: 1 rank $stream1 GB/s, $(nproc) ranks $streamN GB/s"
-echo "{\"stream\": 1, \"gbs_1\": $stream1, \"gbs_all\": $streamN, \"nproc\": $(nproc)}" >>"$rec"
+# stream_def: the yardstick of these readings (bench/stream_triad.cpp: non-temporal
+# stores, 24 bytes per element); records without it hold plain-store readings.
+echo "{\"stream\": 1, \"stream_def\": \"nt_24B\", \"gbs_1\": $stream1, \"gbs_all\": $streamN, \"nproc\": $(nproc)}" >>"$rec"
 
 gen() {  # n -> $WORK/net_n.h5, records generation time and peak RSS
   local n=$1 f="$WORK/net_$1.h5"
@@ -64,8 +66,9 @@ solve() {  # n ranks alg kind
     --max-iter "$ITERS" --tol 0 --history-every "$ITERS" --partition "$PARTITION" --temporal-block "$BLOCK" \
     --json "$js" -q
   b1=$(triad "$np")
-  python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); d["kind"]=sys.argv[2]
-d["stream_before_gbs"], d["stream_after_gbs"] = float(sys.argv[3]), float(sys.argv[4]); print(json.dumps(d))' \
+  /usr/bin/python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); d["kind"]=sys.argv[2]
+d["stream_before_gbs"], d["stream_after_gbs"] = float(sys.argv[3]), float(sys.argv[4]); d["stream_def"] = "nt_24B"
+print(json.dumps(d))' \
     "$js" "$kind" "$b0" "$b1" >>"$rec"
   [[ ${KEEP:-0} == 1 ]] || rm -f "$WORK/r_${n}_${np}_${alg}.h5"
 }
