@@ -92,17 +92,22 @@ def experiments_md(traj):
 
 
 def trajectory_counts(net, path):
-    """Runs whose recorded ML cost rises somewhere along the trajectory."""
+    """Runs whose recorded ML cost rises somewhere along the trajectory (strictly,
+    and by more than a relative 1e-9 and 1e-6), and the largest spike over the
+    run's final cost, per sigma."""
     seq = collections.defaultdict(list)
     with open(path) as fh:
-        rd = csv.DictReader(fh)
-        for r in rd:
+        for r in csv.DictReader(fh):
             seq[(r["sigma"], r["trial"], r["algorithm"])].append(float(r["ml_cost"]))
     for alg in ("mm", "bb"):
-        runs = [v for (s, t, a), v in seq.items() if a == alg]
-        up = [v for v in runs if any(b > a for a, b in zip(v, v[1:]))]
-        spike = max((max(b / a for a, b in zip(v, v[1:]) if a > 0) for v in runs), default=float("nan"))
-        print(f"  {net} trajectories: {alg} rises in {len(up)} of {len(runs)} runs; largest one-step rise x{spike:.3g}")
+        runs = {k: v for k, v in seq.items() if k[2] == alg}
+        counts = [sum(any(b > a * (1 + thr) for a, b in zip(v, v[1:])) for v in runs.values())
+                  for thr in (0.0, 1e-9, 1e-6)]
+        print(f"  {net} trajectories: {alg} cost rises in {counts[0]} / {counts[1]} / {counts[2]} of {len(runs)} runs "
+              f"(strictly / by > 1e-9 relative / by > 1e-6)")
+        for sigma in sorted({k[0] for k in runs}, key=float):
+            spike = max(max(v) / v[-1] for k, v in runs.items() if k[0] == sigma)
+            print(f"    sigma {sigma}: largest recorded cost / final cost of a run = {spike:.3g}")
 
 
 def ceres_md():
