@@ -17,7 +17,9 @@ For an old reading G:
 
 Usage: /usr/bin/python3 tools/restate_ratios.py [FILE...]
   FILE: a record of jobs/bench10m.sbatch (*.txt with "STREAM triad (2 ranks)")
-  or of bench/scaling.sh (*.jsonl). Without files: every file that
+  or of bench/scaling.sh (*.jsonl); job records must come from the old
+  stream_triad (before 2026-12-01: they carry no tag), scaling records tagged
+  "stream_def": "nt_24B" are taken as they are. Without files: every file that
   docs/performance.md cites for a ratio.
 Prints one row per solve: the old reading(s), the old ratio (mean of the
 readings, as the scripts computed it) and the restated one.
@@ -82,6 +84,8 @@ def scaling_rows(path):
             continue  # records before the model field: not restated (no ratio of them is cited)
         readings = ([r["stream_before_gbs"], r["stream_after_gbs"]] if "stream_before_gbs" in r
                     else [start["gbs_all"]])
+        if r.get("stream_def") == "nt_24B":  # already the current yardstick: undo the restatement
+            readings = [g / FACTOR for g in readings]
         ms = 1e3 * r["iterate_seconds"] / r["iterations"]
         out.append(row(os.path.basename(path), r["kind"], r["num_sensors"], r["ranks"], r["algorithm"], ms,
                        r[key], readings, r.get("temporal_block", 1)))
