@@ -65,6 +65,16 @@ struct GenerateOptions {
 /// made connected, and the family's parameters; deterministic in the seed.
 ProblemData generate_problem(const GenerateOptions& options);
 
+/// What generate_problem did (for the command's summary).
+struct GenerateReport {
+  double radius = 0;             ///< link radius of the random geometric graph
+  GlobalId geometric_links = 0;  ///< links within the radius
+  GlobalId path_links = 0;       ///< links added by the planted Hamilton path (not already there)
+  GlobalId components = 0;       ///< components before joining (after the path, if any)
+  GlobalId connect_links = 0;    ///< links added to join them (nearest pairs)
+};
+ProblemData generate_problem(const GenerateOptions& options, GenerateReport* report);
+
 /// The local objectives of a set of nodes (a rank's owned nodes, in its local
 /// order): f_p, its gradient and Hessian at a q-vector x.
 class LocalObjectives {
