@@ -5,9 +5,12 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <cstdlib>
+#include <algorithm>
 #include <string>
+#include <vector>
 
 #include "snl/cli/commands.hpp"
+#include "snl/cli/consensus.hpp"
 #include "snl/io/h5file.hpp"
 #include "snl/core/mpi_util.hpp"
 
@@ -112,6 +115,42 @@ int main(int argc, char** argv) {
   x->add_option("--seed", ex.seed, "seed of the noise draws and starts")->capture_default_str();
   x->add_option("--partition", ex.partition, "metis|block")->capture_default_str();
   x->add_flag("-q,--quiet", ex.quiet, "no progress output");
+
+  // `snl consensus generate|solve ...` (seed 001) parse their own options.
+  app.add_subcommand("consensus", "consensus optimisation (seed 001): snl consensus generate|solve --help")
+      ->allow_extras()
+      ->prefix_command();
+  if (argc >= 2 && std::string(argv[1]) == "consensus") {
+    const std::string which = argc >= 3 ? argv[2] : "";
+    const std::vector<std::string> rest(argv + std::min(argc, 3), argv + argc);
+    int status = 0;
+    try {
+      if (which == "generate")
+        status = snl::consensus_generate_main(rest, comm);
+      else if (which == "solve")
+        status = snl::consensus_solve_main(rest, comm);
+      else {
+        if (root)
+          std::fprintf(stderr, "usage: snl consensus generate|solve ... (see snl consensus solve --help)%s\n",
+                       which.empty() || which == "--help" || which == "-h" ? "" : ("; unknown '" + which + "'").c_str());
+        status = which == "--help" || which == "-h" ? 0 : 2;
+      }
+    } catch (const snl::Error& err) {
+      status = fail(comm, err.what(), 1);
+    } catch (const std::bad_alloc&) {
+      snl::abort_all(comm, "out of memory");
+    } catch (const std::exception& err) {
+      snl::abort_all(comm, std::string("internal error: ") + err.what());
+    }
+    int unclean = snl::h5_close_failed() ? 1 : 0, any_unclean = 0;
+    MPI_Allreduce(&unclean, &any_unclean, 1, MPI_INT, MPI_MAX, comm);
+    if (any_unclean) {
+      std::fflush(nullptr);
+      std::_Exit(status);
+    }
+    MPI_Finalize();
+    return status;
+  }
 
   try {
     app.parse(argc, argv);
