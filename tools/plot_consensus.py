@@ -1,0 +1,130 @@
+#!/usr/bin/python3
+"""Figures 6-7 of seed 001 for snl's consensus solvers (docs/consensus.md).
+
+Converts `snl consensus solve` result files (format snl-consensus-result) into
+one CSV per method (the history columns), then draws from the CSVs only:
+
+  * PNG 1: (a) absolute error max_p |x_p - x*| and (b) F - F_min, against
+    primal iterations: the first-order methods' running averages (what 001
+    plots; their iterates dotted) and Newton's iterates.
+  * PNG 2: the same against messages per node (what the primal count hides).
+
+Usage:
+  plot_consensus.py --results newton-tree=R1.h5 ... --csv-dir DIR --prefix fig67 \
+                    --png FIG.png --png-messages FIG_MSG.png
+  plot_consensus.py --methods newton-tree,... --csv-dir DIR --prefix fig67 --png ...   (CSVs only)
+Runs with Debian's /usr/bin/python3 (numpy, h5py, matplotlib).
+"""
+import argparse
+import csv
+import os
+import sys
+
+import numpy as np
+
+COLUMNS = ["iteration", "dual_iterations", "messages_per_node", "reals_per_node", "F", "F_running_average",
+           "max_abs_error", "max_abs_error_running_average"]
+STYLE = {"newton-tree": ("C0", "Newton (spanning tree)"), "newton-path": ("C1", "Newton (Hamilton path)"),
+         "subgradient": ("C2", "distributed subgradient"), "incremental": ("C3", "incremental"),
+         "central": ("k", "central Newton")}
+
+
+def to_csv(result, path):
+    import h5py
+    with h5py.File(result, "r") as f:
+        if f.attrs.get("format") != "snl-consensus-result":
+            sys.exit(f"{result}: not an snl-consensus-result file")
+        h = f["history"]
+        missing = [c for c in COLUMNS if c not in h]
+        if missing:
+            sys.exit(f"{result}: history lacks {missing}")
+        cols = {c: np.asarray(h[c][()]) for c in COLUMNS}
+        meta = {k: f.attrs[k] for k in ("method", "dual", "termination", "iterations", "dual_iterations",
+                                        "messages_per_node") if k in f.attrs}
+    with open(path, "w", newline="") as out:
+        out.write("# " + ", ".join(f"{k}={v.decode() if isinstance(v, bytes) else v}" for k, v in meta.items()) + "\n")
+        w = csv.writer(out)
+        w.writerow(COLUMNS)
+        for r in range(len(cols["iteration"])):
+            w.writerow([repr(float(cols[c][r])) if cols[c].dtype.kind == "f" else int(cols[c][r]) for c in COLUMNS])
+
+
+def read_csv(path):
+    with open(path) as f:
+        rows = [line for line in f if not line.startswith("#")]
+    r = csv.DictReader(rows)
+    data = {c: [] for c in r.fieldnames}
+    for row in r:
+        for c in r.fieldnames:
+            data[c].append(float(row[c]))
+    return {c: np.asarray(v) for c, v in data.items()}
+
+
+def draw(series, xkey, xlabel, png, title):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.6))
+    fstar = min(float(np.nanmin(d["F"])) for d in series.values())
+    for m, d in series.items():
+        color, label = STYLE.get(m, (None, m))
+        x = d[xkey] + (1 if xkey == "iteration" else 0)  # log axis: iteration k plotted at k + 1
+        # Newton's iterates themselves (the solver keeps no running average of
+        # them); the first-order methods' running averages (what 001 plots), and
+        # their plain iterates dotted.
+        avg = not m.startswith("newton") and not np.all(np.isnan(d["F_running_average"]))
+        err = d["max_abs_error_running_average"] if avg else d["max_abs_error"]
+        fval = d["F_running_average"] if avg else d["F"]
+        tag = ", running average" if avg else ", iterate"
+        ax1.plot(x, np.maximum(err, 1e-16), color=color, label=label + tag)
+        ax2.plot(x, np.maximum(fval - fstar, 1e-16), color=color, label=label + tag)
+        if avg:
+            ax1.plot(x, np.maximum(d["max_abs_error"], 1e-16), color=color, ls=":", lw=0.8, label=label + ", iterate")
+            ax2.plot(x, np.maximum(d["F"] - fstar, 1e-16), color=color, ls=":", lw=0.8, label=label + ", iterate")
+    for ax in (ax1, ax2):
+        ax.set_xscale("log", nonpositive="mask")  # no messages yet: not drawn
+        ax.set_yscale("log")
+        ax.set_xlabel(xlabel)
+        ax.grid(True, which="both", alpha=0.3)
+    ax1.set_ylabel("absolute error  max_p |x_p - x*|")
+    ax2.set_ylabel(f"F - F_min  (F_min = {fstar:.10g})")
+    ax1.set_title("(a) absolute error")
+    ax2.set_title("(b) objective value")
+    ax2.legend(fontsize=7, loc="upper right")
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(png, dpi=110)
+    print(f"wrote {png}")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--results", nargs="*", default=[], help="METHOD=RESULT.h5 pairs")
+    ap.add_argument("--methods", default="", help="comma-separated methods (with CSVs already in --csv-dir)")
+    ap.add_argument("--csv-dir", required=True)
+    ap.add_argument("--prefix", default="fig67")
+    ap.add_argument("--png", required=True)
+    ap.add_argument("--png-messages")
+    ap.add_argument("--title", default="001 Figs. 6-7 (reconstruction): 100 nodes, family exp")
+    a = ap.parse_args()
+    os.makedirs(a.csv_dir, exist_ok=True)
+    methods = [m for m in a.methods.split(",") if m]
+    for item in a.results:
+        m, _, path = item.partition("=")
+        if not path:
+            sys.exit(f"--results wants METHOD=FILE, got {item!r}")
+        csv_path = os.path.join(a.csv_dir, f"{a.prefix}_{m}.csv")
+        to_csv(path, csv_path)
+        print(f"wrote {csv_path}")
+        methods.append(m)
+    if not methods:
+        sys.exit("nothing to plot: give --results or --methods")
+    series = {m: read_csv(os.path.join(a.csv_dir, f"{a.prefix}_{m}.csv")) for m in methods}
+    draw(series, "iteration", "primal iteration + 1", a.png, a.title + ": against primal iterations")
+    if a.png_messages:
+        draw(series, "messages_per_node", "messages per node (cumulative)", a.png_messages,
+             a.title + ": against messages per node")
+
+
+if __name__ == "__main__":
+    main()
