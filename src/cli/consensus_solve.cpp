@@ -1,5 +1,5 @@
 // `snl consensus solve`: the distributed solvers of seed 001 on a problem file
-// (docs/consensus-solve.md): result file snl-consensus-result, --json summary,
+// (docs/distributed-newton.md): result file snl-consensus-result, --json summary,
 // progress on rank 0, checkpoints and stop signals as `snl solve`.
 #include <CLI/CLI.hpp>
 #include <cmath>

@@ -1,5 +1,5 @@
 #pragma once
-// Distributed solvers of seed 001 (docs/consensus.md): the distributed Newton
+// Distributed solvers of seed 001 (docs/distributed-newton.md): the distributed Newton
 // method on the BFS spanning tree (001 Alg. 2) or on a Hamilton path (Alg. 1),
 // with the dual solved by Wei-Ozdaglar-Jadbabaie's matrix splitting or exactly by
 // two tree sweeps; the paper's baselines (distributed subgradient,
