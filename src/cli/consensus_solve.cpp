@@ -121,6 +121,9 @@ int run_consensus_solve(const ConsensusSolveCommand& cmd, MPI_Comm comm) {
   }
   const bool talk = comm_rank(comm) == 0 && !cmd.quiet;
   const consensus::ProblemData data = consensus::read_problem(comm, cmd.problem);
+  if (cmd.solver.method_kind() == consensus::Method::kNewtonPath && data.truth_path.empty())
+    throw Error(cmd.problem + ": --method newton-path needs a Hamilton path and the problem has none (no dataset "
+                "truth_path; generate one with --hamiltonian, or use --method newton-tree)");
   if (talk)
     std::fprintf(stderr, "snl consensus solve: n=%lld q=%d, %lld links, family %s, method %s%s%s on %d ranks\n",
                  static_cast<long long>(data.num_nodes), data.dim, static_cast<long long>(data.edges.size() / 2),
