@@ -26,7 +26,7 @@ COLUMNS = ["iteration", "dual_iterations", "messages_per_node", "reals_per_node"
            "max_abs_error", "max_abs_error_running_average"]
 STYLE = {"newton-tree": ("C0", "Newton (spanning tree)"), "newton-path": ("C1", "Newton (Hamilton path)"),
          "subgradient": ("C2", "distributed subgradient"), "incremental": ("C3", "incremental"),
-         "central": ("k", "central Newton")}
+         "newton-tree-exact": ("C4", "Newton (spanning tree), exact dual"), "central": ("k", "central Newton")}
 
 
 def to_csv(result, path):
@@ -60,12 +60,15 @@ def read_csv(path):
     return {c: np.asarray(v) for c, v in data.items()}
 
 
-def draw(series, xkey, xlabel, png, title):
+def draw(series, xkey, xlabel, png, title, steps=False):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 4.6))
     fstar = min(float(np.nanmin(d["F"])) for d in series.values())
+    # Against messages, x stays put while a primal iteration spends its
+    # messages (Newton: its dual iterations): steps, not straight lines.
+    ds = "steps-post" if steps else "default"
     for m, d in series.items():
         color, label = STYLE.get(m, (None, m))
         x = d[xkey] + (1 if xkey == "iteration" else 0)  # log axis: iteration k plotted at k + 1
@@ -76,11 +79,13 @@ def draw(series, xkey, xlabel, png, title):
         err = d["max_abs_error_running_average"] if avg else d["max_abs_error"]
         fval = d["F_running_average"] if avg else d["F"]
         tag = ", running average" if avg else ", iterate"
-        ax1.plot(x, np.maximum(err, 1e-16), color=color, label=label + tag)
-        ax2.plot(x, np.maximum(fval - fstar, 1e-16), color=color, label=label + tag)
+        ax1.plot(x, np.maximum(err, 1e-16), color=color, label=label + tag, drawstyle=ds)
+        ax2.plot(x, np.maximum(fval - fstar, 1e-16), color=color, label=label + tag, drawstyle=ds)
         if avg:
-            ax1.plot(x, np.maximum(d["max_abs_error"], 1e-16), color=color, ls=":", lw=0.8, label=label + ", iterate")
-            ax2.plot(x, np.maximum(d["F"] - fstar, 1e-16), color=color, ls=":", lw=0.8, label=label + ", iterate")
+            ax1.plot(x, np.maximum(d["max_abs_error"], 1e-16), color=color, ls=":", lw=0.8, label=label + ", iterate",
+                     drawstyle=ds)
+            ax2.plot(x, np.maximum(d["F"] - fstar, 1e-16), color=color, ls=":", lw=0.8, label=label + ", iterate",
+                     drawstyle=ds)
     for ax in (ax1, ax2):
         ax.set_xscale("log", nonpositive="mask")  # no messages yet: not drawn
         ax.set_yscale("log")
@@ -123,7 +128,7 @@ def main():
     draw(series, "iteration", "primal iteration + 1", a.png, a.title + ": against primal iterations")
     if a.png_messages:
         draw(series, "messages_per_node", "messages per node (cumulative)", a.png_messages,
-             a.title + ": against messages per node")
+             a.title + ": against messages per node", steps=True)
 
 
 if __name__ == "__main__":
