@@ -67,6 +67,11 @@ std::string check_edges(const ProblemData& d) {
   const GlobalId n = d.num_nodes;
   if (d.edges.size() % 2 != 0) return "dataset 'edges' has " + std::to_string(d.edges.size()) + " values, expected 2 per row";
   const GlobalId E = static_cast<GlobalId>(d.edges.size() / 2);
+  // Checked first, so that a huge num_nodes with little data (only logistic
+  // files tie no dataset to n) cannot make the checks below allocate for n.
+  if (E < n - 1)
+    return "dataset 'edges' has " + s(E) + " rows: the graph is not connected (" + s(n) +
+           " nodes need at least " + s(n - 1) + " links); consensus is undefined on a disconnected network";
   for (GlobalId e = 0; e < E; ++e) {
     const GlobalId i = d.edges[2 * e], j = d.edges[2 * e + 1];
     for (GlobalId v : {i, j})

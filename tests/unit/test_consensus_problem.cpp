@@ -320,6 +320,14 @@ TEST(ConsensusValidate, TruthPathNotAPathOfTheGraph) {
   expect_refused(d, "truth_path", "row 5");
 }
 
+TEST(ConsensusValidate, TooFewLinksForAConnectedGraph) {
+  ProblemData d = good(Family::kLogistic, 2);
+  d.truth_path.clear();
+  d.num_nodes = 2000000000;  // logistic ties no dataset to n: refused before anything is sized by n
+  d.owner.assign(d.owner.size(), 0);
+  expect_refused(d, "edges", "at least 1999999999 links");
+}
+
 TEST(ConsensusValidate, DisconnectedGraph) {
   ProblemData d = good();
   d.truth_path.clear();
