@@ -226,6 +226,18 @@ std::int64_t read_checkpoint(MPI_Comm comm, const std::string& path, const Probl
   return k;
 }
 
+// The summary's totals from the last record and the counters.
+void finish(SolveSummary& s, std::int64_t k, const Counters& c, double n, const Runner& r,
+            std::vector<double>* x_rows) {
+  s.iterations = k;
+  s.dual_iterations = c.dual_iterations;
+  s.max_abs_error = s.history.back().max_abs_error;
+  s.objective = s.history.back().objective;
+  s.messages_per_node = c.messages / n;
+  s.reals_per_node = c.reals / n;
+  if (x_rows) *x_rows = r.x_rows();
+}
+
 }  // namespace
 
 SolveSummary solve(MPI_Comm comm, const ProblemData& data, const SolveOptions& opt,
@@ -300,13 +312,7 @@ SolveSummary solve(MPI_Comm comm, const ProblemData& data, const SolveOptions& o
       break;
     }
   }
-  s.iterations = k;
-  s.dual_iterations = c.dual_iterations;
-  s.max_abs_error = s.history.back().max_abs_error;
-  s.objective = s.history.back().objective;
-  s.messages_per_node = c.messages / n;
-  s.reals_per_node = c.reals / n;
-  if (x_rows) *x_rows = r.x_rows();
+  finish(s, k, c, n, r, x_rows);
   s.wall_seconds = MPI_Wtime() - t0;
   return s;
 }
