@@ -12,7 +12,10 @@
 # invocation adds its own header with its settings).
 # Usage: bench/consensus_scaling.sh [BUILD_DIR]   (default build)
 # Settings (environment): NS, NPS, DUALS ("exact splitting"), SPLIT_FULL_MAX,
-# SPLIT_CAP_ITERS, PROBE_NS ("" skips the probe), PROBE_CAP, OUT.
+# SPLIT_CAP_ITERS, PROBE_NS ("" skips the probe), PROBE_CAP, OUT; RATE_NS ("" skips
+# it): the splitting's contraction rate on the same problems, computed with
+# tools/plot_consensus.py --splitting-rate, to RATE_OUT
+# (docs/data/consensus/splitting_rate.txt).
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 SNL=${SNL:-$ROOT/${1:-build}/bin/snl}
@@ -24,6 +27,8 @@ SPLIT_CAP_ITERS=${SPLIT_CAP_ITERS:-1}
 PROBE_NS=${PROBE_NS-"100 1000 10000"}
 PROBE_CAP=${PROBE_CAP:-300000}
 OUT=${OUT:-$ROOT/docs/data/consensus/scaling.txt}
+RATE_NS=${RATE_NS-"100 1000 10000 100000 1000000"}
+RATE_OUT=${RATE_OUT:-$ROOT/docs/data/consensus/splitting_rate.txt}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 W=$(mktemp -d "${TMPDIR:-/tmp}/consensus_scaling.XXXXXX")
 trap 'rm -rf "$W"' EXIT
@@ -92,4 +97,18 @@ for n in $PROBE_NS; do
     --dual-max-iter "$PROBE_CAP")
   row "$n" "$links" 1 splitting 1 "$W/j.json" "$wall" >> "$OUT"
 done
+if [ -n "$RATE_NS" ]; then
+  {
+    echo "# bench/consensus_scaling.sh, $(date -u +%Y-%m-%dT%H:%MZ): the dual splitting's contraction at the first"
+    echo "# Newton step (x = 0) on newton-tree's BFS tree; problems as above (--avg-degree 6 --seed 1, family exp)."
+    echo "# /usr/bin/python3 tools/plot_consensus.py --splitting-rate P.h5: lambda_min of (D + Bbar)^-1 M,"
+    echo "# rate = 1 - lambda_min per dual iteration, iters_1e-12 = ln(1e12) / lambda_min"
+    echo "#        n  depth  lambda_min         rate  iters_1e-12"
+  } >> "$RATE_OUT"
+  for n in $RATE_NS; do
+    "$SNL" consensus generate -o "$W/q$n.h5" --nodes "$n" --avg-degree 6 --seed 1 -q
+    /usr/bin/python3 "$ROOT/tools/plot_consensus.py" --splitting-rate "$W/q$n.h5" | grep -v '^#' >> "$RATE_OUT"
+    rm -f "$W/q$n.h5"
+  done
+fi
 echo "wrote $OUT"

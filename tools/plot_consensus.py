@@ -9,7 +9,14 @@ one CSV per method (the history columns), then draws from the CSVs only:
     plots; their iterates dotted) and Newton's iterates.
   * PNG 2: the same against messages per node (what the primal count hides).
 
+With --splitting-rate PROB.h5 ... (family exp) it prints instead, for the
+first Newton step from x = 0, the contraction of 001's dual splitting on the
+solver's BFS tree: lambda_min of (D + Bbar)^-1 M (M = A H^-1 A^T), the
+iteration's rate 1 - lambda_min, and ln(1e12) / lambda_min, the dual iterations
+that reduce the dual error 1e12-fold.
+
 Usage:
+  plot_consensus.py --splitting-rate PROB.h5 ...
   plot_consensus.py --results newton-tree=R1.h5 ... --csv-dir DIR --prefix fig67 \
                     --png FIG.png --png-messages FIG_MSG.png
   plot_consensus.py --methods newton-tree,... --csv-dir DIR --prefix fig67 --png ...   (CSVs only)
@@ -102,7 +109,53 @@ def draw(series, xkey, xlabel, png, title, steps=False):
     print(f"wrote {png}")
 
 
+def splitting_rate(path):
+    """(n, tree depth, lambda_min) of the splitting at x = 0 on the BFS tree
+    that newton-tree uses (root 0; parent = smallest-id neighbour one level up)."""
+    import h5py
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as sla
+    with h5py.File(path, "r") as f:
+        if f.attrs["family"] != "exp":
+            sys.exit(f"{path}: --splitting-rate handles family exp only")
+        n = int(f.attrs["num_nodes"])
+        e = f["edges"][()]
+        a, b, c, d = (f[k][()] for k in ("exp_a", "exp_b", "exp_c", "exp_d"))
+    G = sp.coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(n, n))
+    G = (G + G.T).tocsr()
+    G.sort_indices()
+    level = np.full(n, -1)
+    parent = np.full(n, -1)
+    level[0] = 0
+    frontier, lev = np.array([0]), 0
+    while len(frontier):
+        nxt = np.unique(np.concatenate([G.indices[G.indptr[u]:G.indptr[u + 1]] for u in frontier]))
+        nxt = nxt[level[nxt] < 0]
+        level[nxt] = lev + 1
+        for v in nxt:
+            nb = G.indices[G.indptr[v]:G.indptr[v + 1]]
+            parent[v] = nb[level[nb] == lev].min()
+        frontier, lev = nxt, lev + 1
+    h = 1.0 / (a * b * b + c * d * d)  # H_p^-1 at x = 0
+    kids = np.flatnonzero(parent >= 0)
+    m = len(kids)
+    rows = np.r_[np.arange(m), np.arange(m)]
+    A = sp.coo_matrix((np.r_[np.ones(m), -np.ones(m)], (rows, np.r_[kids, parent[kids]])), shape=(m, n)).tocsr()
+    M = (A @ sp.diags(h) @ A.T).tocsr()
+    D = M.diagonal()
+    Bbar = np.asarray(abs(M - sp.diags(D)).sum(axis=1)).ravel()
+    lam = sla.eigsh(M.tocsc(), k=1, M=sp.diags(D + Bbar).tocsc(), sigma=0, which="LM",
+                    return_eigenvectors=False)[0]
+    return n, int(level.max()), float(lam)
+
+
 def main():
+    if len(sys.argv) > 1 and sys.argv[1] == "--splitting-rate":
+        print(f"# {'n':>8} {'depth':>6} {'lambda_min':>11} {'rate':>12} {'iters_1e-12':>12}")
+        for path in sys.argv[2:]:
+            n, depth, lam = splitting_rate(path)
+            print(f"{n:>10} {depth:>6} {lam:>11.4e} {1 - lam:>12.10f} {np.log(1e12) / lam:>12.4g}", flush=True)
+        return
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--results", nargs="*", default=[], help="METHOD=RESULT.h5 pairs")
     ap.add_argument("--methods", default="", help="comma-separated methods (with CSVs already in --csv-dir)")
