@@ -100,7 +100,7 @@ done
 if [ -n "$RATE_NS" ]; then
   {
     echo "# bench/consensus_scaling.sh, $(date -u +%Y-%m-%dT%H:%MZ): the dual splitting's contraction at the first"
-    echo "# Newton step (x = 0) on newton-tree's BFS tree; problems as above (--avg-degree 6 --seed 1, family exp)."
+    echo "# Newton step (x = 0) on newton-tree's BFS tree; problems as in scaling.txt (--avg-degree 6 --seed 1, family exp)."
     echo "# /usr/bin/python3 tools/plot_consensus.py --splitting-rate P.h5: lambda_min of (D + Bbar)^-1 M,"
     echo "# rate = 1 - lambda_min per dual iteration, iters_1e-12 = ln(1e12) / lambda_min"
     echo "#        n  depth  lambda_min         rate  iters_1e-12"
