@@ -142,40 +142,20 @@ PYEOF
 "$SNL" consensus solve "$T/quad.h5" -o "$T/keep.h5" --max-iter 2 -q
 sum0=$(md5sum < "$T/keep.h5")
 
-# One failing run: non-zero (not a crash), one error line containing $word, keep.h5 untouched.
-check_failure() {
-  local label=$1 word=$2 rc=$3
-  [ "$rc" -ne 124 ] || fail "$label: hang (killed by timeout)"
-  [ "$rc" -ne 0 ] || fail "$label: accepted"
-  [ "$rc" -lt 128 ] || fail "$label: crashed (status $rc)"
-  local nerr
-  nerr=$(grep -c '^snl: error: ' "$T/err" || true)
-  [ "$nerr" -eq 1 ] || { cat "$T/err"; fail "$label: expected exactly one error line, got $nerr"; }
-  grep -q "internal error" "$T/err" && fail "$label: internal error instead of a clear message"
-  grep '^snl: error: ' "$T/err" | grep -q -- "$word" || { cat "$T/err"; fail "$label: error does not mention '$word'"; }
-  [ "$(md5sum < "$T/keep.h5")" = "$sum0" ] || fail "$label: existing output was modified"
-  if ls "$T"/keep.h5.* > /dev/null 2>&1; then fail "$label: temporary file left behind"; fi
-}
-
-n=0
+# Jobs, one a line: label<TAB>word<TAB>expected status ("any" non-zero, or a number)<TAB>np<TAB>snl arguments.
+# They run 4 at a time (a run mostly waits for MPI start-up); each must fail with exactly one
+# error line containing the word, never crash or hang, and leave keep.h5 untouched.
+: > "$T/jobs"
 while IFS=$'\t' read -r f word; do
   name=$(basename "$f" .h5)
   nps="1 3"
-  # exp_b..exp_d take exp_a's code path: 1 rank suffices (keeps the test within its time limit).
+  # exp_b..exp_d take exp_a's code path: 1 rank suffices.
   case $name in exp_[bcd]_*) nps=1 ;; esac
   for np in $nps; do
-    set +e
-    timeout 60 "$MPIEXEC" "$MPIEXEC_NUMPROC_FLAG" $np --oversubscribe "$SNL" consensus solve "$f" -o "$T/keep.h5" \
-      --max-iter 2 -q < /dev/null > "$T/out" 2> "$T/err"
-    rc=$?
-    set -e
-    check_failure "$name np=$np" "$word" $rc
-    n=$((n + 1))
+    printf '%s\t%s\tany\t%s\tconsensus solve %s -o %s --max-iter 2 -q\n' "$name np=$np" "$word" "$np" "$f" "$T/keep.h5" >> "$T/jobs"
   done
 done < "$T/list"
-echo "consensus_bad_input: $n failing solve runs checked"
-
-# Bad options: exit 2 for generate, non-zero for solve; one error line; output untouched.
+# Bad options: exit 2 for generate, non-zero for solve.
 gen_bad=(
   "--nodes 1|--nodes" "--nodes abc|--nodes" "--nodes 10 --family cubic|--family" "--nodes 10 --dim 2|--dim"
   "--nodes 10 --avg-degree -1|--avg-degree" "--nodes 10 --avg-degree 10|--avg-degree"
@@ -183,38 +163,62 @@ gen_bad=(
   "--nodes 10 --family quadratic --dim 0|--dim" "--nodes 10 --bogus|--bogus" "--avg-degree 4|--nodes"
 )
 for entry in "${gen_bad[@]}"; do
-  opts=${entry%|*} word=${entry#*|}
   for np in 1 3; do
-    set +e
-    # shellcheck disable=SC2086
-    timeout 60 "$MPIEXEC" "$MPIEXEC_NUMPROC_FLAG" $np --oversubscribe "$SNL" consensus generate -o "$T/keep.h5" $opts \
-      > "$T/out" 2> "$T/err"
-    rc=$?
-    set -e
-    check_failure "generate $opts np=$np" "$word" $rc
-    [ "$rc" -eq 2 ] || fail "generate $opts np=$np: exit status $rc, expected 2"
-    n=$((n + 1))
+    printf '%s\t%s\t2\t%s\tconsensus generate -o %s %s\n' "generate ${entry%|*} np=$np" "${entry#*|}" "$np" \
+      "$T/keep.h5" "${entry%|*}" >> "$T/jobs"
   done
 done
 solve_bad=("--method foo|--method" "--dual foo|--dual" "--max-iter -1|--max-iter" "--tol -1|--tol" "--bogus|--bogus")
 for entry in "${solve_bad[@]}"; do
-  opts=${entry%|*} word=${entry#*|}
   for np in 1 3; do
-    set +e
-    # shellcheck disable=SC2086
-    timeout 60 "$MPIEXEC" "$MPIEXEC_NUMPROC_FLAG" $np --oversubscribe "$SNL" consensus solve "$T/quad.h5" \
-      -o "$T/keep.h5" $opts -q > "$T/out" 2> "$T/err"
-    rc=$?
-    set -e
-    check_failure "solve $opts np=$np" "$word" $rc
-    n=$((n + 1))
+    printf '%s\t%s\tany\t%s\tconsensus solve %s -o %s %s -q\n' "solve ${entry%|*} np=$np" "${entry#*|}" "$np" \
+      "$T/quad.h5" "$T/keep.h5" "${entry%|*}" >> "$T/jobs"
   done
 done
+
+"$SNL" consensus solve "$T/quad.h5" -o "$T/keep.h5" --max-iter 2 -q
+sum0=$(md5sum < "$T/keep.h5")
+export T SNL MPIEXEC MPIEXEC_NUMPROC_FLAG sum0
+
+# One failing run: non-zero (not a crash), one error line containing $word, keep.h5 untouched.
+check_failure() {
+  local label=$1 word=$2 rc=$3 err=$4
+  [ "$rc" -ne 124 ] || fail "$label: hang (killed by timeout)"
+  [ "$rc" -ne 0 ] || fail "$label: accepted"
+  [ "$rc" -lt 128 ] || fail "$label: crashed (status $rc)"
+  local nerr
+  nerr=$(grep -c '^snl: error: ' "$err" || true)
+  [ "$nerr" -eq 1 ] || { cat "$err"; fail "$label: expected exactly one error line, got $nerr"; }
+  grep -q "internal error" "$err" && fail "$label: internal error instead of a clear message"
+  grep '^snl: error: ' "$err" | grep -q -- "$word" || { cat "$err"; fail "$label: error does not mention '$word'"; }
+  [ "$(md5sum < "$T/keep.h5")" = "$sum0" ] || fail "$label: existing output was modified"
+  if ls "$T"/keep.h5.* > /dev/null 2>&1; then fail "$label: temporary file left behind"; fi
+  return 0
+}
+run_job() {
+  local label word expect np args rc err
+  IFS=$'\t' read -r label word expect np args <<< "$1"
+  err=$(mktemp "$T/err.XXXXXX")
+  set +e
+  # shellcheck disable=SC2086
+  timeout 60 "$MPIEXEC" "$MPIEXEC_NUMPROC_FLAG" "$np" --oversubscribe "$SNL" $args < /dev/null > /dev/null 2> "$err"
+  rc=$?
+  set -e
+  check_failure "$label" "$word" "$rc" "$err"
+  [ "$expect" = any ] || [ "$rc" -eq "$expect" ] || fail "$label: exit status $rc, expected $expect"
+}
+export -f check_failure run_job fail
+xargs -d '\n' -n 1 -P "${JOBS:-4}" bash -c 'set -euo pipefail; run_job "$1"' _ < "$T/jobs" \
+  || fail "some failing run misbehaved (messages above)"
+n=$(wc -l < "$T/jobs")
+[ "$(md5sum < "$T/keep.h5")" = "$sum0" ] || fail "existing output was modified"
+echo "consensus_bad_input: $n failing runs checked"
+
 # A missing problem file, and an output directory that does not exist.
 set +e
 mpi 3 "$SNL" consensus solve "$T/nope.h5" -o "$T/keep.h5" -q > "$T/out" 2> "$T/err"; rc=$?
 set -e
-check_failure "missing problem" "nope.h5" $rc
+check_failure "missing problem" "nope.h5" $rc "$T/err"
 set +e
 mpi 3 "$SNL" consensus generate -o "$T/nodir/p.h5" --nodes 10 > "$T/out" 2> "$T/err"; rc=$?
 set -e
