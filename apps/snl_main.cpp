@@ -1,14 +1,17 @@
 // snl: sensor network localization. A thin command-line front end: parsing
-// here, everything else in libsnl (include/snl/cli/commands.hpp); the
+// here, everything else in libsnl (include/snl/cli/commands.hpp, consensus.hpp); the
 // algorithm names and capabilities come from the registry (snl/solvers/registry.hpp).
 #include <mpi.h>
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <cstdlib>
+#include <algorithm>
 #include <string>
+#include <vector>
 
 #include "snl/cli/commands.hpp"
+#include "snl/cli/consensus.hpp"
 #include "snl/io/h5file.hpp"
 #include "snl/core/mpi_util.hpp"
 
@@ -190,6 +193,30 @@ int run_guarded(Commands& c, MPI_Comm comm) {
   return 1;  // not reached: abort_all does not return
 }
 
+// `snl consensus generate|solve ...` (seed 001): those commands parse their own
+// options; failures become one message and an exit status, as in run_guarded.
+int run_consensus(int argc, char** argv, MPI_Comm comm) {
+  const bool root = snl::comm_rank(comm) == 0;
+  const std::string which = argc >= 3 ? argv[2] : "";
+  const std::vector<std::string> rest(argv + std::min(argc, 3), argv + argc);
+  try {
+    if (which == "generate") return snl::consensus_generate_main(rest, comm);
+    if (which == "solve") return snl::consensus_solve_main(rest, comm);
+    const bool help = which.empty() || which == "--help" || which == "-h";
+    if (root)
+      std::fprintf(stderr, "usage: snl consensus generate|solve ... (see snl consensus solve --help)%s\n",
+                   help ? "" : ("; unknown '" + which + "'").c_str());
+    return which == "--help" || which == "-h" ? 0 : snl::kExitUsage;
+  } catch (const snl::Error& err) {
+    return fail(comm, err.what(), 1);
+  } catch (const std::bad_alloc&) {
+    snl::abort_all(comm, "out of memory");
+  } catch (const std::exception& err) {
+    snl::abort_all(comm, std::string("internal error: ") + err.what());
+  }
+  return 1;  // not reached: abort_all does not return
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -207,14 +234,25 @@ int main(int argc, char** argv) {
   add_solve(app, c);
   add_eval(app, c);
   add_experiment(app, c);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::ParseError& err) {
-    const int status = root ? app.exit(err) : err.get_exit_code();
-    MPI_Finalize();
-    return status;
+
+  // `snl consensus generate|solve ...` (seed 001) parse their own options.
+  app.add_subcommand("consensus", "consensus optimisation (seed 001): snl consensus generate|solve --help")
+      ->allow_extras()
+      ->prefix_command();
+  int status = 0;
+  if (argc >= 2 && std::string(argv[1]) == "consensus") {
+    status = run_consensus(argc, argv, comm);
+  } else {
+    try {
+      app.parse(argc, argv);
+    } catch (const CLI::ParseError& err) {
+      // --help and --version exit 0; every parse error is a usage error (status 2).
+      const int code = root ? app.exit(err) : err.get_exit_code();
+      MPI_Finalize();
+      return code == 0 ? 0 : snl::kExitUsage;
+    }
+    status = run_guarded(c, comm);
   }
-  const int status = run_guarded(c, comm);
   // After a failed H5Fclose (disk full) HDF5 would crash in its shutdown inside
   // MPI_Finalize (snl::h5_close_failed): then every rank leaves without it, with
   // the status already decided (the error was reported above).

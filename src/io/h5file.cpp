@@ -414,6 +414,22 @@ void H5File::set_attr(const std::string& name, double value) {
   collective_try(impl_->comm, [&] { set_number_attr(*impl_, name, value); });
 }
 
+void H5File::set_attr(const std::string& name, const std::vector<double>& values) {
+  collective_try(impl_->comm, [&] {
+    const H5FileState& m = *impl_;
+    m.need_write();
+    std::string obj, leaf;
+    split_name(name, obj, leaf);
+    prepare_attr(m, obj, leaf);
+    const hsize_t len = values.size();
+    Hid space(H5Screate_simple(1, &len, nullptr));
+    Hid a(H5Acreate_by_name(m.file, obj.c_str(), leaf.c_str(), file_type<double>(), space, H5P_DEFAULT, H5P_DEFAULT,
+                            H5P_DEFAULT));
+    if (!a.ok() || H5Awrite(a, native_type<double>(), values.data()) < 0)
+      throw Error(m.where("cannot write attribute '" + name + "' (" + h5_detail() + ")"));
+  });
+}
+
 std::string H5File::attr_string(const std::string& name) const {
   const Impl& m = *impl_;
   std::string out;

@@ -36,6 +36,8 @@ class H5File {
   void set_attr(const std::string& name, const std::string& value);
   void set_attr(const std::string& name, std::int64_t value);
   void set_attr(const std::string& name, double value);
+  /// A 1-D array of doubles (e.g. a vector such as x*).
+  void set_attr(const std::string& name, const std::vector<double>& values);
   /// A fixed-length string attribute (as MATLAB and Fortran codes write them);
   /// padded with spaces or NULs. For interoperability; set_attr writes the
   /// variable-length strings h5py writes.

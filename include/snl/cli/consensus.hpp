@@ -1,0 +1,50 @@
+#pragma once
+// The `snl consensus ...` subcommands (docs/consensus.md) as library functions.
+// Each is collective over `comm`.
+#include <mpi.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "snl/consensus/problem.hpp"
+#include "snl/consensus/solver.hpp"
+
+namespace snl {
+
+// ---- generate (problem side) ----
+struct ConsensusGenerateCommand {
+  std::string output;
+  consensus::GenerateOptions options;
+  bool quiet = false;
+};
+/// Generates a problem and writes it atomically (an existing output is replaced
+/// only on success). Throws snl::Error (identical on every rank) on failure.
+void run_consensus_generate(const ConsensusGenerateCommand& cmd, MPI_Comm comm);
+
+/// `snl consensus generate ARGS...`: parses `args` (the words after
+/// "generate"), runs, and reports errors on rank 0 as one "snl: error: ..." line.
+/// Returns the exit status: 0 success (or --help), 2 bad options, 1 failure.
+int consensus_generate_main(const std::vector<std::string>& args, MPI_Comm comm);
+
+// ---- solve (solver side) ----
+struct ConsensusSolveCommand {
+  std::string problem;
+  std::string output;
+  std::string json;
+  consensus::SolveOptions solver;
+  std::string checkpoint;             ///< --checkpoint CKPT.h5
+  std::int64_t checkpoint_every = 0;  ///< --checkpoint-every K (primal iterations)
+  std::string restart;                ///< --restart CKPT.h5
+  bool quiet = false;
+  double progress_seconds = 2.0;
+};
+/// Returns the process exit status (0 on success, 3 when stopped by a signal
+/// after writing a checkpoint, 4 on a numerical failure). Throws snl::Error
+/// (identical on every rank) on bad input, with no output touched.
+int run_consensus_solve(const ConsensusSolveCommand& cmd, MPI_Comm comm);
+
+/// `snl consensus solve ARGS...`: as consensus_generate_main.
+int consensus_solve_main(const std::vector<std::string>& args, MPI_Comm comm);
+
+}  // namespace snl

@@ -1,0 +1,116 @@
+#pragma once
+// Distributed solvers of seed 001 (docs/distributed-newton.md): the distributed Newton
+// method on the BFS spanning tree (001 Alg. 2) or on a Hamilton path (Alg. 1),
+// with the dual solved by Wei-Ozdaglar-Jadbabaie's matrix splitting or exactly by
+// two tree sweeps; the paper's baselines (distributed subgradient,
+// Nedic-Ozdaglar; incremental, Ram-Nedic-Veeravalli); and `central`, the damped
+// Newton method on F that gives the x* every method is measured against.
+#include <mpi.h>
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "snl/consensus/problem.hpp"
+
+namespace snl::consensus {
+
+enum class Method { kNewtonTree, kNewtonPath, kSubgradient, kIncremental, kCentral };
+enum class DualSolver { kNone, kSplitting, kExact };
+const char* method_name(Method m);
+const char* dual_name(DualSolver d);  ///< "none" | "splitting" | "exact"
+
+/// Command-line options. Those left unset take the method's default; validate()
+/// refuses non-positive values and an option the method cannot honour.
+struct SolveOptions {
+  std::string method = "newton-tree";       ///< newton-tree|newton-path|subgradient|incremental|central
+  std::optional<std::string> dual;          ///< splitting|exact (Newton only); default splitting
+  std::optional<std::int64_t> max_iter;     ///< primal iterations; default 100 (Newton, central), 1000 (baselines)
+  std::optional<std::int64_t> dual_max_iter;  ///< dual iterations per Newton step (splitting); default 10000
+  std::optional<double> tol;       ///< Newton, central: decrement theta <= tol (default 1e-10); baselines: error of
+                                   ///< the running average <= tol (default 0: run max_iter iterations)
+  std::optional<double> dual_tol;  ///< splitting ends when max|w(t+1) - w(t)| <= dual_tol max|w(t+1)|; default 1e-12
+  std::optional<double> step;      ///< baselines' alpha0 in alpha_k = alpha0 / sqrt(k + 1); default 0.1
+  double damping = 0.9;            ///< b of the damped step b / (theta + 1) when theta >= 1/4
+  std::string partition = "metis"; ///< metis|block
+
+  /// "" when valid, else one message naming the option.
+  std::string validate() const;
+  Method method_kind() const;      ///< after validate()
+  DualSolver dual_kind() const;    ///< kNone for the methods without a dual
+  std::int64_t max_iterations() const;
+  std::int64_t dual_max_iterations() const;
+  double tolerance() const;
+  double dual_tolerance() const;
+  double step0() const;
+  /// The options a checkpoint must match to be resumed (all but max_iter, tol, partition).
+  std::string checkpoint_key() const;
+};
+
+/// One history record (after primal iteration `iteration`; 0 is the start).
+struct HistoryRecord {
+  std::int64_t iteration = 0;
+  std::int64_t dual_iterations = 0;  ///< cumulative
+  double max_abs_error = 0;          ///< max_p max_k |x_pk - x*_k|
+  double objective = 0;              ///< F at the nodes' average
+  double messages = 0;               ///< per node, cumulative
+  double reals = 0;                  ///< per node, cumulative
+  double avg_max_abs_error = 0;      ///< running averages (subgradient, incremental); NaN otherwise
+  double avg_objective = 0;          ///< F at the nodes' average of the running averages; NaN otherwise
+  double decrement = 0;              ///< Newton decrement theta of the step taken (Newton, central); NaN otherwise
+  double step = 0;                   ///< primal step size used
+  double elapsed = 0;                ///< seconds since the solve began
+};
+
+struct SolveSummary {
+  std::string method, dual;
+  std::int64_t iterations = 0, dual_iterations = 0;
+  std::string termination;  ///< CONVERGENCE | NO_CONVERGENCE | SIGNAL | FAILURE
+  std::string message;
+  bool converged = false;
+  double max_abs_error = 0, objective = 0, messages_per_node = 0, reals_per_node = 0;
+  double wall_seconds = 0;
+  int ranks = 1;
+  std::vector<double> x_star;  ///< [q]
+  std::vector<HistoryRecord> history;
+  std::string partition;       ///< what was used
+  std::int32_t tree_depth = 0; ///< depth of the tree the method used (0 if none)
+};
+
+/// Checkpointing as in `snl solve`: a checkpoint every `every` primal
+/// iterations and when a stop signal arrives (SIGTERM, SIGUSR1), written
+/// atomically; a restart resumes bit-identically on any number of ranks.
+struct CheckpointSettings {
+  std::string path;
+  std::int64_t every = 0;
+  std::string restart;
+  bool stop_on_signal = false;
+};
+
+using RecordCallback = std::function<void(const HistoryRecord&)>;
+
+/// Collective. Solves `data` (validated, identical on every rank). On return
+/// `x_rows` holds on rank 0 every node's copy of x in node order ([n * q]),
+/// empty elsewhere. Throws snl::Error (on every rank) for invalid options.
+SolveSummary solve(MPI_Comm comm, const ProblemData& data, const SolveOptions& options,
+                   const CheckpointSettings& checkpoint, const RecordCallback& on_record,
+                   std::vector<double>* x_rows);
+
+/// x* by the damped Newton method on F with global sums in node order
+/// (collective; the same bits on any number of ranks). Iterates until the
+/// decrement is below 1e-12 or stagnates below 1e-6 (at most 200 iterations).
+std::vector<double> central_optimum(MPI_Comm comm, const ProblemData& data);
+
+/// For tests: one Newton step of newton-tree/newton-path from the node copies
+/// `x_rows` (node order, on every rank, warm start w = 0); returns the link
+/// duals w in node order on every rank (row of the root, or of path[0], zero)
+/// and the dual iterations it took.
+std::vector<double> newton_dual(MPI_Comm comm, const ProblemData& data, const SolveOptions& options,
+                                const std::vector<double>& x_rows, std::int64_t* dual_iterations = nullptr);
+
+/// Order-independent 64-bit fingerprint of a problem (16 hex digits).
+std::string problem_fingerprint(const ProblemData& data);
+
+}  // namespace snl::consensus

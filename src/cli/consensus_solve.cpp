@@ -1,0 +1,229 @@
+// `snl consensus solve`: the distributed solvers of seed 001 on a problem file
+// (docs/distributed-newton.md): result file snl-consensus-result, --json summary,
+// progress on rank 0, checkpoints and stop signals as `snl solve`.
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include "core/json.hpp"
+#include "snl/cli/commands.hpp"
+#include "snl/cli/consensus.hpp"
+#include "snl/core/mpi_util.hpp"
+#include "snl/io/h5file.hpp"
+#include "snl/solvers/checkpoint.hpp"
+
+namespace snl {
+
+namespace {
+
+// Progress on rank 0 at most every `period` seconds (and at the last record).
+class Progress {
+ public:
+  Progress(MPI_Comm comm, double period, std::int64_t max_iter, bool quiet)
+      : on_(comm_rank(comm) == 0 && !quiet), period_(period), max_iter_(max_iter) {}
+  void operator()(const consensus::HistoryRecord& r) {
+    if (!on_) return;
+    if (!header_) {
+      header_ = true;
+      std::fprintf(stderr, "%10s %10s %16s %12s %12s %12s %9s\n", "iter", "dual_iter", "F(avg)", "max_err",
+                   "decrement", "msgs/node", "elapsed");
+    }
+    if (r.elapsed - last_ < period_ && r.iteration != max_iter_ && r.iteration != 0) return;
+    last_ = r.elapsed;
+    std::fprintf(stderr, "%10lld %10lld %16.10g %12.4e %12.4e %12.6g %8.1fs\n", static_cast<long long>(r.iteration),
+                 static_cast<long long>(r.dual_iterations), r.objective, r.max_abs_error, r.decrement, r.messages,
+                 r.elapsed);
+  }
+
+ private:
+  bool on_;
+  double period_;
+  std::int64_t max_iter_;
+  bool header_ = false;
+  double last_ = -1e300;
+};
+
+void write_consensus_result(const ConsensusSolveCommand& cmd, MPI_Comm comm, const consensus::ProblemData& d,
+                            const consensus::SolveSummary& s, const std::vector<double>& x_rows) {
+  H5File f(cmd.output, comm, H5File::Mode::kCreate);
+  f.set_attr("format", std::string("snl-consensus-result"));
+  f.set_attr("version", std::int64_t{1});
+  f.set_attr("num_nodes", std::int64_t{d.num_nodes});
+  f.set_attr("dim", std::int64_t{d.dim});
+  f.set_attr("method", s.method);
+  f.set_attr("dual", s.dual);
+  f.set_attr("iterations", s.iterations);
+  f.set_attr("dual_iterations", s.dual_iterations);
+  f.set_attr("termination", s.termination);
+  f.set_attr("converged", std::int64_t{s.converged ? 1 : 0});
+  f.set_attr("x_star", s.x_star);
+  f.set_attr("max_abs_error", s.max_abs_error);
+  f.set_attr("F", s.objective);
+  f.set_attr("messages_per_node", s.messages_per_node);
+  f.set_attr("reals_per_node", s.reals_per_node);
+  f.set_attr("partition", s.partition);
+  f.set_attr("problem", cmd.problem);
+  const bool root = comm_rank(comm) == 0;
+  f.write_rows("x", static_cast<std::uint64_t>(d.num_nodes), static_cast<std::uint64_t>(d.dim), 0, x_rows.data(),
+               root ? static_cast<std::uint64_t>(d.num_nodes) : 0);
+  auto column = [&](const char* name, auto get) {
+    std::vector<double> v;
+    for (const auto& r : s.history) v.push_back(get(r));
+    f.write_replicated(std::string("history/") + name, v);
+  };
+  using R = consensus::HistoryRecord;
+  column("iteration", [](const R& r) { return double(r.iteration); });
+  column("dual_iterations", [](const R& r) { return double(r.dual_iterations); });
+  column("F", [](const R& r) { return r.objective; });
+  column("max_abs_error", [](const R& r) { return r.max_abs_error; });
+  column("messages_per_node", [](const R& r) { return r.messages; });
+  column("reals_per_node", [](const R& r) { return r.reals; });
+  column("F_running_average", [](const R& r) { return r.avg_objective; });
+  column("max_abs_error_running_average", [](const R& r) { return r.avg_max_abs_error; });
+  column("decrement", [](const R& r) { return r.decrement; });
+  column("step", [](const R& r) { return r.step; });
+  f.commit();
+}
+
+std::string json_summary(const consensus::SolveSummary& s) {
+  JsonObject j;
+  j.add("method", s.method)
+      .add("dual", s.dual)
+      .add("iterations", s.iterations)
+      .add("dual_iterations", s.dual_iterations)
+      .add("termination", s.termination)
+      .add_bool("converged", s.converged)
+      .add("max_abs_error", s.max_abs_error)
+      .add("F", s.objective)
+      .add("messages_per_node", s.messages_per_node)
+      .add("reals_per_node", s.reals_per_node)
+      .add("wall_seconds", s.wall_seconds)
+      .add("ranks", s.ranks)
+      .add("partition", s.partition)
+      .add("tree_depth", static_cast<std::int64_t>(s.tree_depth));
+  for (std::size_t k = 0; k < s.x_star.size(); ++k) j.add("x_star_" + std::to_string(k), s.x_star[k]);
+  return j.str();
+}
+
+}  // namespace
+
+int run_consensus_solve(const ConsensusSolveCommand& cmd, MPI_Comm comm) {
+  const std::string bad = cmd.solver.validate();
+  if (!bad.empty()) throw Error(bad);
+  if (cmd.checkpoint_every < 0) throw Error("--checkpoint-every must be >= 0");
+  if (cmd.checkpoint_every > 0 && cmd.checkpoint.empty()) throw Error("--checkpoint-every needs --checkpoint FILE");
+  check_output_path(cmd.output, comm);
+  if (!cmd.json.empty()) check_output_path(cmd.json, comm);
+  if (!cmd.checkpoint.empty()) {
+    check_output_path(cmd.checkpoint, comm);
+    install_stop_signal_handlers();
+  }
+  const bool talk = comm_rank(comm) == 0 && !cmd.quiet;
+  const consensus::ProblemData data = consensus::read_problem(comm, cmd.problem);
+  if (cmd.solver.method_kind() == consensus::Method::kNewtonPath && data.truth_path.empty())
+    throw Error(cmd.problem + ": --method newton-path needs a Hamilton path and the problem has none (no dataset "
+                "truth_path; generate one with --hamiltonian, or use --method newton-tree)");
+  if (talk)
+    std::fprintf(stderr, "snl consensus solve: n=%lld q=%d, %lld links, family %s, method %s%s%s on %d ranks\n",
+                 static_cast<long long>(data.num_nodes), data.dim, static_cast<long long>(data.edges.size() / 2),
+                 consensus::family_name(data.family), cmd.solver.method.c_str(),
+                 cmd.solver.dual_kind() == consensus::DualSolver::kNone ? "" : ", dual ",
+                 cmd.solver.dual_kind() == consensus::DualSolver::kNone ? ""
+                                                                         : consensus::dual_name(cmd.solver.dual_kind()),
+                 comm_size(comm));
+  Progress progress(comm, cmd.progress_seconds, cmd.solver.max_iterations(), cmd.quiet);
+  consensus::CheckpointSettings ck;
+  ck.path = cmd.checkpoint;
+  ck.every = cmd.checkpoint_every;
+  ck.restart = cmd.restart;
+  ck.stop_on_signal = !cmd.checkpoint.empty();
+  std::vector<double> x_rows;
+  const consensus::SolveSummary s =
+      consensus::solve(comm, data, cmd.solver, ck, [&](const consensus::HistoryRecord& r) { progress(r); }, &x_rows);
+  if (s.termination == "SIGNAL") {
+    if (talk) std::fprintf(stderr, "snl consensus solve: %s; resume with --restart %s\n", s.message.c_str(),
+                           cmd.checkpoint.c_str());
+    return kExitCheckpointed;
+  }
+  write_consensus_result(cmd, comm, data, s, x_rows);
+  if (!cmd.json.empty()) {
+    std::string err;
+    if (comm_rank(comm) == 0) {
+      try {
+        write_text_atomic(cmd.json, json_summary(s));
+      } catch (const std::exception& e) {
+        err = e.what();
+      }
+    }
+    agree(comm, err);
+  }
+  if (talk) {
+    std::fprintf(stderr,
+                 "snl consensus %s (dual %s): %s after %lld iterations (%lld dual)%s%s\n  max_p |x_p - x*| = %.3e, "
+                 "F(avg) = %.12g; per node %.6g messages, %.6g reals; %.3f s on %d ranks\n",
+                 s.method.c_str(), s.dual.c_str(), s.termination.c_str(), static_cast<long long>(s.iterations),
+                 static_cast<long long>(s.dual_iterations), s.message.empty() ? "" : ": ", s.message.c_str(),
+                 s.max_abs_error, s.objective, s.messages_per_node, s.reals_per_node, s.wall_seconds, s.ranks);
+  }
+  return s.termination == "FAILURE" ? 4 : 0;
+}
+
+int consensus_solve_main(const std::vector<std::string>& args, MPI_Comm comm) {
+  const bool root = comm_rank(comm) == 0;
+  ConsensusSolveCommand cmd;
+  auto& o = cmd.solver;
+  std::string dual;
+  std::int64_t max_iter = 0, dual_max_iter = 0;
+  double tol = 0, dual_tol = 0, step = 0;
+  CLI::App app{"solve a consensus problem with a distributed method (run under mpirun)", "snl consensus solve"};
+  app.add_option("problem", cmd.problem, "problem file (snl-consensus)")->required();
+  app.add_option("-o,--output", cmd.output, "result file (snl-consensus-result)")->required();
+  app.add_option("--method", o.method, "newton-tree|newton-path|subgradient|incremental|central")
+      ->capture_default_str();
+  auto* o_dual = app.add_option("--dual", dual, "Newton's dual solver: splitting (default) or exact");
+  auto* o_max = app.add_option("--max-iter", max_iter, "primal iterations (default 100; baselines 1000)");
+  auto* o_dmax = app.add_option("--dual-max-iter", dual_max_iter, "dual iterations per Newton step (default 10000)");
+  auto* o_tol = app.add_option("--tol", tol,
+                               "Newton/central: stop when the decrement <= tol (default 1e-10); baselines: when the "
+                               "running average's max error <= tol (default 0: run --max-iter)");
+  auto* o_dtol = app.add_option("--dual-tol", dual_tol,
+                                "splitting: stop when max|w(t+1)-w(t)| <= dual-tol max|w(t+1)| (default 1e-12)");
+  auto* o_step = app.add_option("--step", step, "baselines: alpha0 of the step alpha0/sqrt(k+1) (default 0.1)");
+  app.add_option("--partition", o.partition, "metis|block")->capture_default_str();
+  app.add_option("--json", cmd.json, "write a JSON summary");
+  app.add_option("--checkpoint", cmd.checkpoint, "write checkpoints to this file (atomically replaced)");
+  app.add_option("--checkpoint-every", cmd.checkpoint_every, "checkpoint every K primal iterations");
+  app.add_option("--restart", cmd.restart, "resume from a checkpoint (any number of ranks)");
+  app.add_option("--progress-seconds", cmd.progress_seconds, "seconds between progress lines")->capture_default_str();
+  app.add_flag("-q,--quiet", cmd.quiet, "no progress output");
+  try {
+    std::vector<std::string> rev(args.rbegin(), args.rend());  // CLI11 takes them reversed
+    app.parse(rev);
+    if (o_dual->count()) o.dual = dual;
+    if (o_max->count()) o.max_iter = max_iter;
+    if (o_dmax->count()) o.dual_max_iter = dual_max_iter;
+    if (o_tol->count()) o.tol = tol;
+    if (o_dtol->count()) o.dual_tol = dual_tol;
+    if (o_step->count()) o.step = step;
+    const std::string bad = o.validate();
+    if (!bad.empty()) throw Error(bad);
+  } catch (const CLI::CallForHelp&) {
+    if (root) std::printf("%s", app.help().c_str());
+    return 0;
+  } catch (const CLI::ParseError& e) {
+    if (root) std::fprintf(stderr, "snl: error: %s (see snl consensus solve --help)\n", e.what());
+    return 2;
+  } catch (const Error& e) {
+    if (root) std::fprintf(stderr, "snl: error: %s\n", e.what());
+    return 2;
+  }
+  try {
+    return run_consensus_solve(cmd, comm);
+  } catch (const Error& e) {
+    if (root) std::fprintf(stderr, "snl: error: %s\n", e.what());
+    return 1;
+  }
+}
+
+}  // namespace snl

@@ -1,0 +1,45 @@
+#!/usr/bin/env bash
+# snl consensus solve under signals: SIGTERM (and SIGUSR1) stop a run after it
+# writes a checkpoint (exit 3, no result written); --restart on another number
+# of ranks ends with the uninterrupted run's x and history, bit for bit. A
+# checkpoint of other options or of another problem is refused.
+source "$(dirname "$0")/common.bash"
+"$SNL" consensus generate -o "$T/p.h5" --nodes 80 --seed 11 -q
+"$SNL" consensus generate -o "$T/q.h5" --nodes 80 --seed 12 -q
+same() {  # x and every history column identical
+  h5diff "$1" "$2" /x > /dev/null || fail "$3: x differs"
+  h5diff "$1" "$2" /history > /dev/null || fail "$3: history differs"
+}
+for m in "newton-tree --dual splitting" "subgradient --max-iter 40" "incremental --max-iter 40"; do
+  read -r -a ARGS <<< "--method $m -q"
+  mpi 2 "$SNL" consensus solve "$T/p.h5" -o "$T/ref.h5" "${ARGS[@]}"
+  for sig in TERM USR1; do
+    rm -f "$T/ck.h5" "$T/out.h5"
+    SNL_TEST_CONSENSUS_DELAY=0.2 setsid "$MPIEXEC" "$MPIEXEC_NUMPROC_FLAG" 3 --oversubscribe \
+      -x SNL_TEST_CONSENSUS_DELAY "$SNL" consensus solve "$T/p.h5" -o "$T/out.h5" "${ARGS[@]}" --checkpoint "$T/ck.h5" &
+    pid=$!
+    sleep 1.5
+    # The signal goes to the ranks (as a batch system sends it), not to mpirun.
+    ranks=$(ps -o pid=,comm= -g "$pid" | awk '$2 == "snl" {print $1}')
+    [ -n "$ranks" ] || fail "$m: the run ended before the signal"
+    kill -s "$sig" $ranks
+    rc=0
+    wait "$pid" || rc=$?
+    [ "$rc" -eq 3 ] || fail "$m: SIG$sig gave exit $rc, expected 3"
+    [ -f "$T/ck.h5" ] || fail "$m: no checkpoint after SIG$sig"
+    [ -f "$T/out.h5" ] && fail "$m: a result was written after SIG$sig"
+    mpi 1 "$SNL" consensus solve "$T/p.h5" -o "$T/out.h5" "${ARGS[@]}" --restart "$T/ck.h5"
+    same "$T/ref.h5" "$T/out.h5" "$m after SIG$sig, resumed on 1 rank"
+  done
+  # Refused: other options, another problem (one error line, exit 1, output untouched).
+  cp "$T/ref.h5" "$T/keep.h5"
+  rc=0
+  mpi 2 "$SNL" consensus solve "$T/p.h5" -o "$T/ref.h5" --method central -q --restart "$T/ck.h5" 2> "$T/err" || rc=$?
+  [ "$rc" -eq 1 ] && grep -q "checkpoint of other options" "$T/err" || fail "$m: other options not refused ($rc)"
+  rc=0
+  mpi 2 "$SNL" consensus solve "$T/q.h5" -o "$T/ref.h5" "${ARGS[@]}" --restart "$T/ck.h5" 2> "$T/err" || rc=$?
+  [ "$rc" -eq 1 ] && grep -q "checkpoint of another problem" "$T/err" || fail "$m: other problem not refused ($rc)"
+  [ "$(grep -c 'snl: error' "$T/err")" -eq 1 ] || fail "$m: expected one error line"
+  cmp -s "$T/ref.h5" "$T/keep.h5" || fail "$m: a refused restart touched the output"
+done
+echo "solve_consensus_signal: signals, restarts and refusals as expected"

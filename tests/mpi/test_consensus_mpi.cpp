@@ -1,0 +1,437 @@
+// Consensus solvers (seed 001) on 1, 2 and 3 ranks: the distributed BFS tree
+// against a serial BFS, tree sweeps, the exact dual against a dense solve of
+// A H^-1 A^T w = rhs, the splitting against the exact dual, Newton's accuracy,
+// bit-identical results on every number of ranks (sub-communicators of the
+// run's ranks), checkpoint/restart, and refused options and inputs.
+#include <gtest/gtest.h>
+#include <mpi.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <queue>
+#include <string>
+
+#include "snl/consensus/problem.hpp"
+#include "snl/consensus/solver.hpp"
+#include "snl/consensus/tree.hpp"
+#include "snl/core/mpi_util.hpp"
+#include "snl/graph/dist_graph.hpp"
+#include "snl/io/network.hpp"
+
+using namespace snl;
+using namespace snl::consensus;
+
+namespace {
+
+const MPI_Comm kWorld = MPI_COMM_WORLD;
+
+ProblemData make_problem(GlobalId n, std::uint64_t seed, Family family = Family::kExp, int dim = 1,
+                         bool hamiltonian = false) {
+  GenerateOptions o;
+  o.nodes = n;
+  o.seed = seed;
+  o.family = family;
+  o.dim = dim;
+  o.hamiltonian = hamiltonian;
+  o.samples_per_node = 5;
+  return generate_problem(o);
+}
+
+// Serial BFS with the same rule: parent = the smallest id on the previous level.
+void serial_bfs(GlobalId n, const std::vector<GlobalId>& edges, std::vector<GlobalId>& parent,
+                std::vector<int>& level) {
+  std::vector<std::vector<GlobalId>> adj(n);
+  for (std::size_t e = 0; e < edges.size(); e += 2) {
+    adj[edges[e]].push_back(edges[e + 1]);
+    adj[edges[e + 1]].push_back(edges[e]);
+  }
+  level.assign(n, -1);
+  parent.assign(n, -1);
+  std::queue<GlobalId> todo;
+  level[0] = 0;
+  todo.push(0);
+  while (!todo.empty()) {
+    const GlobalId u = todo.front();
+    todo.pop();
+    for (GlobalId v : adj[u])
+      if (level[v] < 0) {
+        level[v] = level[u] + 1;
+        todo.push(v);
+      }
+  }
+  for (GlobalId v = 1; v < n; ++v)
+    for (GlobalId u : adj[v])
+      if (level[u] == level[v] - 1 && (parent[v] < 0 || u < parent[v])) parent[v] = u;
+}
+
+std::vector<GlobalId> block_share(MPI_Comm comm, const std::vector<GlobalId>& edges) {
+  GlobalId b, e;
+  block_range(static_cast<GlobalId>(edges.size() / 2), comm_size(comm), comm_rank(comm), b, e);
+  return std::vector<GlobalId>(edges.begin() + 2 * b, edges.begin() + 2 * e);
+}
+
+// Small graphs: a path, a star, a cycle, a 2-D grid, and random geometric graphs.
+std::vector<std::pair<GlobalId, std::vector<GlobalId>>> test_graphs() {
+  std::vector<std::pair<GlobalId, std::vector<GlobalId>>> g;
+  std::vector<GlobalId> e;
+  for (GlobalId i = 0; i + 1 < 7; ++i) e.insert(e.end(), {(i * 3) % 7, ((i + 1) * 3) % 7});  // a shuffled path
+  g.push_back({7, e});
+  e.clear();
+  for (GlobalId i = 1; i < 9; ++i) e.insert(e.end(), {i, 4 == i ? 0 : 4});
+  e.insert(e.end(), {4, 0});
+  e.erase(e.begin() + 6, e.begin() + 8);  // star around node 4 (one duplicate link removed)
+  g.push_back({9, e});
+  e.clear();
+  for (GlobalId i = 0; i < 10; ++i) e.insert(e.end(), {i, (i + 1) % 10});
+  g.push_back({10, e});
+  e.clear();
+  for (GlobalId r = 0; r < 6; ++r)
+    for (GlobalId c = 0; c < 6; ++c) {
+      if (c + 1 < 6) e.insert(e.end(), {r * 6 + c, r * 6 + c + 1});
+      if (r + 1 < 6) e.insert(e.end(), {r * 6 + c, (r + 1) * 6 + c});
+    }
+  g.push_back({36, e});
+  g.push_back({1, {}});
+  for (std::uint64_t s : {1, 2}) {
+    const ProblemData d = make_problem(120, s);
+    g.push_back({d.num_nodes, d.edges});
+  }
+  return g;
+}
+
+TEST(ConsensusTree, DistributedBfsMatchesSerialBfs) {
+  for (const auto& [n, edges] : test_graphs())
+    for (auto pm : {PartitionMethod::kMetis, PartitionMethod::kBlock}) {
+      const auto share = block_share(kWorld, edges);
+      const auto owner = partition_graph(kWorld, n, share, pm, nullptr);
+      DistGraph g(kWorld, n, owner, share, {}, 0, 1);
+      const BfsTree t = distributed_bfs(g, 0);
+      std::vector<GlobalId> ids(g.local_to_global().begin(), g.local_to_global().begin() + g.num_owned());
+      NodeGather gather(kWorld, n, ids);
+      std::vector<double> pl;
+      for (LocalId v = 0; v < g.num_owned(); ++v) pl.insert(pl.end(), {double(t.parent[v]), double(t.level[v])});
+      const auto all = gather.to_all(pl.data(), 2);
+      std::vector<GlobalId> parent;
+      std::vector<int> level;
+      serial_bfs(n, edges, parent, level);
+      int depth = 0;
+      for (GlobalId v = 0; v < n; ++v) {
+        EXPECT_EQ(all[2 * v], double(parent[v])) << "n=" << n << " node " << v;
+        EXPECT_EQ(all[2 * v + 1], double(level[v])) << "n=" << n << " node " << v;
+        depth = std::max(depth, level[v]);
+      }
+      EXPECT_EQ(t.depth, depth) << "n=" << n;
+    }
+}
+
+TEST(ConsensusTree, UpSumGivesSubtreeSums) {
+  const ProblemData d = make_problem(150, 4);
+  const GlobalId n = d.num_nodes;
+  std::vector<GlobalId> parent;
+  std::vector<int> level;
+  serial_bfs(n, d.edges, parent, level);
+  const auto owner = partition_graph(kWorld, n, block_share(kWorld, d.edges), PartitionMethod::kMetis, nullptr);
+  std::vector<GlobalId> nodes, parents;
+  std::vector<std::int32_t> levels;
+  for (GlobalId v = 0; v < n; ++v)
+    if (owner[v] == comm_rank(kWorld)) {
+      nodes.push_back(v);
+      parents.push_back(parent[v]);
+      levels.push_back(level[v]);
+    }
+  Tree tree(kWorld, n, owner, nodes, parents, levels, 2);
+  std::vector<double> f(std::size_t(tree.num_local()) * 2, 0.0);
+  for (LocalId v = 0; v < tree.num_owned(); ++v) {
+    f[2 * v] = 1.0;                                            // subtree sizes
+    f[2 * v + 1] = double(tree.graph().global_id(v) * 1000);  // sums of ids
+  }
+  tree.up_sum(f.data(), 2);
+  // Serial subtree sums, deepest level first.
+  std::vector<double> size(n, 1.0), ids(n);
+  for (GlobalId v = 0; v < n; ++v) ids[v] = double(v * 1000);
+  std::vector<GlobalId> order(n);
+  for (GlobalId v = 0; v < n; ++v) order[v] = v;
+  std::sort(order.begin(), order.end(), [&](GlobalId a, GlobalId b) { return level[a] > level[b]; });
+  for (GlobalId v : order)
+    if (parent[v] >= 0) {
+      size[parent[v]] += size[v];
+      ids[parent[v]] += ids[v];
+    }
+  for (LocalId v = 0; v < tree.num_owned(); ++v) {
+    const GlobalId g = tree.graph().global_id(v);
+    EXPECT_EQ(f[2 * v], size[g]) << "node " << g;
+    EXPECT_EQ(f[2 * v + 1], ids[g]) << "node " << g;
+  }
+  if (tree.root_local() >= 0) EXPECT_EQ(f[2 * tree.root_local()], double(n));
+  // Broadcast: every node gets the root's row.
+  tree.broadcast_root(f.data(), 2);
+  for (LocalId v = 0; v < tree.num_owned(); ++v) EXPECT_EQ(f[2 * v], double(n));
+}
+
+// Dense reference: M w = rhs with M = A H^-1 A^T, rhs = A x - A H^-1 g, the
+// link of node c (c != root) to parent[c]; returns w in node order (root row 0).
+std::vector<double> dense_dual(const ProblemData& d, const std::vector<GlobalId>& parent,
+                               const std::vector<double>& x) {
+  const GlobalId n = d.num_nodes;
+  const int q = d.dim;
+  std::vector<GlobalId> all(n);
+  for (GlobalId v = 0; v < n; ++v) all[v] = v;
+  LocalObjectives obj(d, all);
+  Eigen::MatrixXd Hinv = Eigen::MatrixXd::Zero(n * q, n * q);
+  Eigen::VectorXd g(n * q), xv(n * q);
+  std::vector<double> h(q * q);
+  for (GlobalId v = 0; v < n; ++v) {
+    obj.gradient(static_cast<LocalId>(v), &x[v * q], &g[v * q]);
+    obj.hessian(static_cast<LocalId>(v), &x[v * q], h.data());
+    Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> H(h.data(), q, q);
+    Hinv.block(v * q, v * q, q, q) = H.inverse();
+    for (int k = 0; k < q; ++k) xv[v * q + k] = x[v * q + k];
+  }
+  std::vector<GlobalId> link_of(n, -1);
+  GlobalId L = 0;
+  for (GlobalId v = 0; v < n; ++v)
+    if (parent[v] >= 0) link_of[v] = L++;
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(L * q, n * q);
+  for (GlobalId v = 0; v < n; ++v)
+    if (parent[v] >= 0)
+      for (int k = 0; k < q; ++k) {
+        A(link_of[v] * q + k, v * q + k) = 1.0;
+        A(link_of[v] * q + k, parent[v] * q + k) = -1.0;
+      }
+  const Eigen::MatrixXd M = A * Hinv * A.transpose();
+  const Eigen::VectorXd rhs = A * xv - A * (Hinv * g);
+  const Eigen::VectorXd w = M.ldlt().solve(rhs);
+  std::vector<double> out(n * q, 0.0);
+  for (GlobalId v = 0; v < n; ++v)
+    if (parent[v] >= 0)
+      for (int k = 0; k < q; ++k) out[v * q + k] = w[link_of[v] * q + k];
+  return out;
+}
+
+std::vector<double> some_point(const ProblemData& d) {
+  std::vector<double> x(d.num_nodes * d.dim);
+  for (std::size_t i = 0; i < x.size(); ++i) x[i] = 0.3 * std::sin(1.7 * double(i) + 0.4);
+  return x;
+}
+
+double max_rel_diff(const std::vector<double>& a, const std::vector<double>& b) {
+  double m = 0, s = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    m = std::max(m, std::fabs(a[i] - b[i]));
+    s = std::max(s, std::fabs(b[i]));
+  }
+  return m / std::max(s, 1e-300);
+}
+
+struct DualCase {
+  Family family;
+  int dim;
+};
+
+TEST(ConsensusNewton, ExactDualSolvesTheDenseSystemAndSplittingConvergesToIt) {
+  for (const DualCase c : {DualCase{Family::kExp, 1}, DualCase{Family::kQuadratic, 2}, DualCase{Family::kLogistic, 3}}) {
+    const ProblemData d = make_problem(40, 7, c.family, c.dim);
+    std::vector<GlobalId> parent;
+    std::vector<int> level;
+    serial_bfs(d.num_nodes, d.edges, parent, level);
+    const auto x = some_point(d);
+    const auto ref = dense_dual(d, parent, x);
+    SolveOptions o;
+    o.dual = "exact";
+    const auto exact = newton_dual(kWorld, d, o, x);
+    EXPECT_LT(max_rel_diff(exact, ref), 1e-10) << family_name(c.family);
+    SolveOptions s;
+    s.dual = "splitting";
+    s.dual_tol = 1e-15;
+    s.dual_max_iter = 500000;
+    std::int64_t iters = 0;
+    const auto split = newton_dual(kWorld, d, s, x, &iters);
+    EXPECT_LT(max_rel_diff(split, exact), 1e-9) << family_name(c.family) << " after " << iters << " dual iterations";
+    EXPECT_GT(iters, 1);
+  }
+}
+
+// The solver's x on `comm`, with history, flattened for memcmp.
+struct Outcome {
+  SolveSummary s;
+  std::vector<double> x;
+  std::vector<double> flat() const {
+    std::vector<double> f(x);
+    for (const auto& r : s.history)
+      f.insert(f.end(), {double(r.iteration), double(r.dual_iterations), r.max_abs_error, r.objective, r.messages,
+                         r.reals, r.avg_max_abs_error, r.avg_objective, r.decrement, r.step});
+    return f;
+  }
+};
+
+Outcome run(MPI_Comm comm, const ProblemData& d, const SolveOptions& o, const CheckpointSettings& ck = {}) {
+  Outcome r;
+  r.s = solve(comm, d, o, ck, nullptr, &r.x);
+  return r;
+}
+
+TEST(ConsensusNewton, ReachesTheOptimumOnA100NodeExpProblem) {
+  const ProblemData d = make_problem(100, 3);
+  SolveOptions c;
+  c.method = "central";
+  const Outcome central = run(kWorld, d, c);
+  for (const char* dual : {"exact", "splitting"}) {
+    SolveOptions o;
+    o.dual = dual;
+    const Outcome r = run(kWorld, d, o);
+    EXPECT_TRUE(r.s.converged) << dual;
+    EXPECT_LE(r.s.max_abs_error, 1e-8) << dual;
+    EXPECT_LE(r.s.iterations, 20) << dual;
+    if (comm_rank(kWorld) == 0) {
+      double m = 0;
+      for (std::size_t i = 0; i < r.x.size(); ++i) m = std::max(m, std::fabs(r.x[i] - central.x[i]));
+      EXPECT_LE(m, 1e-8) << dual << ": newton-tree differs from central";
+    }
+  }
+}
+
+// Every method on sub-communicators of 1, 2, ... ranks: the same bits.
+TEST(ConsensusDeterminism, BitIdenticalOnEveryNumberOfRanks) {
+  const ProblemData d = make_problem(60, 5);
+  const ProblemData dh = make_problem(60, 5, Family::kExp, 1, true);
+  const ProblemData dl = make_problem(30, 6, Family::kLogistic, 2);
+  struct Case {
+    const char* method;
+    const char* dual;
+    const ProblemData* data;
+  };
+  const Case cases[] = {{"newton-tree", "exact", &d},   {"newton-tree", "splitting", &d},
+                        {"newton-path", "exact", &dh},  {"newton-path", "splitting", &dh},
+                        {"newton-tree", "splitting", &dl}, {"subgradient", nullptr, &d},
+                        {"incremental", nullptr, &d},   {"incremental", nullptr, &dh},
+                        {"central", nullptr, &dl}};
+  const int size = comm_size(kWorld), rank = comm_rank(kWorld);
+  for (const Case& c : cases) {
+    SolveOptions o;
+    o.method = c.method;
+    if (c.dual) o.dual = std::string(c.dual);
+    if (std::string(c.method) == "subgradient" || std::string(c.method) == "incremental") o.max_iter = 60;
+    if (c.dual && std::string(c.dual) == "splitting") o.dual_tol = 1e-9;  // fewer dual iterations, same test
+    std::vector<double> first;
+    for (int p = 1; p <= size; ++p) {
+      MPI_Comm sub;
+      MPI_Comm_split(kWorld, rank < p ? 0 : MPI_UNDEFINED, rank, &sub);
+      if (sub != MPI_COMM_NULL) {
+        const auto f = run(sub, *c.data, o).flat();
+        if (rank == 0) {
+          if (p == 1)
+            first = f;
+          else
+            EXPECT_TRUE(f.size() == first.size() && std::memcmp(f.data(), first.data(), f.size() * 8) == 0)
+                << c.method << " " << (c.dual ? c.dual : "") << ": " << p << " ranks differ from 1 rank";
+        }
+        MPI_Comm_free(&sub);
+      }
+      MPI_Barrier(kWorld);
+    }
+  }
+}
+
+// Checkpoints every 2 iterations on all ranks; resuming the last one on 1
+// rank (and on all ranks) ends with the same bits as the uninterrupted run.
+TEST(ConsensusCheckpoint, RestartOnAnyNumberOfRanksIsBitIdentical) {
+  const ProblemData d = make_problem(50, 8);
+  const int rank = comm_rank(kWorld);
+  const std::string path = std::string(SNL_BINARY_DIR) + "/consensus_ckpt_np" + std::to_string(comm_size(kWorld)) + ".h5";
+  struct Case {
+    const char* method;
+    const char* dual;
+    std::int64_t iters;
+  };
+  for (const Case c : {Case{"newton-tree", "splitting", 5}, Case{"subgradient", nullptr, 9},
+                       Case{"incremental", nullptr, 9}}) {
+    SolveOptions o;
+    o.method = c.method;
+    if (c.dual) o.dual = std::string(c.dual);
+    o.max_iter = c.iters;
+    o.tol = 0.0;
+    CheckpointSettings ck;
+    ck.path = path;
+    ck.every = 2;
+    const Outcome full = run(kWorld, d, o, ck);  // last checkpoint at iteration 4 (newton) or 8
+    ASSERT_EQ(full.s.iterations, c.iters);
+    CheckpointSettings rs;
+    rs.restart = path;
+    const Outcome again = run(kWorld, d, o, rs);
+    MPI_Comm one;
+    MPI_Comm_split(kWorld, rank == 0 ? 0 : MPI_UNDEFINED, rank, &one);
+    if (rank == 0) {
+      const Outcome solo = run(one, d, o, rs);
+      const auto a = full.flat(), b = again.flat(), s = solo.flat();
+      EXPECT_TRUE(a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * 8) == 0) << c.method;
+      EXPECT_TRUE(a.size() == s.size() && std::memcmp(a.data(), s.data(), a.size() * 8) == 0) << c.method;
+      MPI_Comm_free(&one);
+    }
+    // A checkpoint of other options is refused.
+    SolveOptions other = o;
+    other.method = c.method == std::string("subgradient") ? "incremental" : "subgradient";
+    EXPECT_THROW(run(kWorld, d, other, rs), Error);
+    MPI_Barrier(kWorld);
+  }
+  if (rank == 0) std::remove(path.c_str());
+}
+
+TEST(ConsensusOptions, RefusesWhatAMethodCannotHonour) {
+  auto bad = [](SolveOptions o) { return !o.validate().empty(); };
+  SolveOptions o;
+  EXPECT_TRUE(o.validate().empty());
+  o.method = "subgradient";
+  o.dual = "exact";
+  EXPECT_TRUE(bad(o));
+  o = SolveOptions();
+  o.step = 0.5;
+  EXPECT_TRUE(bad(o));  // --step for Newton
+  o = SolveOptions();
+  o.dual = "exact";
+  o.dual_tol = 1e-6;
+  EXPECT_TRUE(bad(o));  // --dual-tol with the exact dual
+  o = SolveOptions();
+  o.method = "central";
+  o.dual_max_iter = 10;
+  EXPECT_TRUE(bad(o));
+  o = SolveOptions();
+  o.method = "incremental";
+  o.step = 0.0;
+  EXPECT_TRUE(bad(o));  // non-positive step
+  o.step = 0.2;
+  EXPECT_FALSE(bad(o));
+  o = SolveOptions();
+  o.method = "newton";
+  EXPECT_TRUE(bad(o));
+  o = SolveOptions();
+  o.dual = "jacobi";
+  EXPECT_TRUE(bad(o));
+  o = SolveOptions();
+  o.dual_tol = -1.0;
+  EXPECT_TRUE(bad(o));
+  o = SolveOptions();
+  o.max_iter = -3;
+  EXPECT_TRUE(bad(o));
+}
+
+TEST(ConsensusOptions, RefusesBadProblemsOnEveryRank) {
+  ProblemData d = make_problem(30, 9);
+  SolveOptions path;
+  path.method = "newton-path";
+  EXPECT_THROW(run(kWorld, d, path), Error);  // no truth_path
+  // A disconnected graph: drop every link of node 5.
+  std::vector<GlobalId> kept;
+  for (std::size_t e = 0; e < d.edges.size(); e += 2)
+    if (d.edges[e] != 5 && d.edges[e + 1] != 5) kept.insert(kept.end(), {d.edges[e], d.edges[e + 1]});
+  d.edges = kept;
+  for (const char* m : {"newton-tree", "subgradient", "central"}) {
+    SolveOptions o;
+    o.method = m;
+    EXPECT_THROW(run(kWorld, d, o), Error) << m;
+  }
+}
+
+}  // namespace
