@@ -89,4 +89,29 @@ import json, sys
 d = json.load(open(sys.argv[1]))
 sys.exit(0 if d['crlb_defined'] is False and 'rigid' in d['crlb_reason'] and 'crlb_rmse' not in d else 1)" \
   "$T/flex.json" || fail "eval --crlb JSON on a flexible network: $(cat "$T/flex.json")"
+# RMSE/MPE over the localizable sensors: s3 has a single measurement (fewer
+# than p+1), so it is left out; s0..s2 each measure three anchors.
+"$PY" - "$T/few.h5" <<'EOF'
+import sys, h5py, numpy as np
+with h5py.File(sys.argv[1], "w") as f:
+    f.attrs["format"] = "snl-network"; f.attrs["version"] = 1; f.attrs["dim"] = 2; f.attrs["num_sensors"] = 4
+    A = np.array([[0., 0.], [1., 0.], [0., 1.], [1., 1.]])
+    t = np.array([[0.2, 0.3], [0.7, 0.4], [0.5, 0.8], [0.9, 0.9]])
+    f["anchors"] = A; f["truth"] = t; f["sigma"] = 0.01
+    se = np.array([[0, 1], [1, 2], [2, 3]], dtype=np.int64)
+    f["sensor_edges"] = se; f["sensor_ranges"] = np.linalg.norm(t[se[:, 0]] - t[se[:, 1]], axis=1)
+    ae = np.array([[0, 0], [0, 1], [0, 2], [1, 1], [1, 3], [2, 2], [2, 3]], dtype=np.int64)
+    f["anchor_edges"] = ae; f["anchor_ranges"] = np.linalg.norm(t[ae[:, 0]] - A[ae[:, 1]], axis=1)
+    # Errors |(0.06, 0.08)| = 0.1, 0, 0.2 and sqrt(2) for s3.
+    f.create_dataset("positions", data=t + np.array([[0.06, 0.08], [0, 0], [0, 0.2], [1, 1]]))
+EOF
+"$SNL" eval "$T/few.h5" "$T/few.h5" --json "$T/few.json" > /dev/null
+"$PY" -c "
+import json, math, sys
+d = json.load(open(sys.argv[1]))
+want = {'rmse_localizable': math.sqrt((0.01 + 0.04) / 3), 'mpe_localizable': (0.1 + 0.2) / 3,
+        'rmse': math.sqrt((0.01 + 0.04 + 2) / 4), 'mpe': (0.1 + 0.2 + math.sqrt(2)) / 4}
+bad = {k: (d.get(k), v) for k, v in want.items() if not abs(d.get(k, math.inf) - v) <= 1e-12}
+print(bad or '', file=sys.stderr)
+sys.exit(1 if bad else 0)" "$T/few.json" || fail "eval: metrics over the localizable sensors are wrong"
 echo "surface_eval: ok"
