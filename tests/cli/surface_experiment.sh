@@ -11,7 +11,8 @@
 #    0 and strictly increasing, ML cost starting at ml_cost_start and ending at
 #    the row's ml_cost and reals;
 #  - --h5: the same table as columns; the same files on 1 and 2 ranks;
-#  - --start random: every listed method from one start, no extra rows.
+#  - --start random: every listed method from one start, no extra rows;
+#    relaxation listed with --start relaxation is refused.
 source "$(dirname "$0")/common.bash"
 "$SNL" generate -o "$T/net.h5" --sensors 60 --avg-degree 10 --anchors 12 --anchor-radius 0.5 --sigma 0.01 --seed 4 -q
 args=(--sigmas 0.002 0.3 --trials 3 --algorithms mm bb --budget 400 --bb-rounds 5 --seed 2 -q)
@@ -81,4 +82,10 @@ for t in ("0", "1"):
 ok &= rows[0]["ml_cost_start"] != rows[-1]["ml_cost_start"]  # a new start per trial
 sys.exit(0 if ok else 1)
 EOF
+# With --start relaxation the relaxation rows are the starting points: listing
+# relaxation as a method too would mix two runs into one row of the aggregate.
+rc=0
+"$SNL" experiment "$T/net.h5" -o "$T/dup.csv" --algorithms relaxation mm --trials 1 -q 2> "$T/err" || rc=$?
+[ $rc -ne 0 ] && grep -q "snl: error: .*--start random" "$T/err" && [ ! -e "$T/dup.csv" ] \
+  || fail "experiment --algorithms relaxation with --start relaxation: rc $rc, $(cat "$T/err")"
 echo "surface_experiment: ok"
