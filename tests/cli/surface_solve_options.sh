@@ -16,7 +16,6 @@
 source "$(dirname "$0")/common.bash"
 "$SNL" generate -o "$T/net.h5" --sensors 50 --avg-degree 7 --sigma 0.05 --seed 13 -q
 "$SNL" solve "$T/net.h5" -o "$T/start.h5" --algorithm relaxation --max-iter 15 --tol 0 -q
-json() { "$PY" -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])" "$@"; }
 
 # --- --init FILE ---
 "$PY" - "$T/plain.h5" <<'EOF'
