@@ -91,7 +91,9 @@ std::string json_evaluation(const EvalCommand& cmd, const Evaluation& ev) {
   JsonObject j;
   j.add("network", cmd.network).add("result", cmd.result).add("ml_cost", c.ml).add("relaxed_cost", c.relaxed);
   j.add("gap_certificate", c.certificate).add("apriori_bound", c.apriori);
-  if (em.valid) j.add("rmse", em.rmse).add("mpe", em.mpe).add("rmse_localizable", em.rmse_localizable);
+  if (em.valid)
+    j.add("rmse", em.rmse).add("mpe", em.mpe).add("rmse_localizable", em.rmse_localizable)
+        .add("mpe_localizable", em.mpe_localizable);
   if (cmd.crlb) {
     j.add_bool("crlb_defined", ev.crlb.defined);
     if (ev.crlb.defined)

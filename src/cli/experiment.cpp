@@ -2,6 +2,7 @@
 // the relaxation (003) to its stopping rule, then each refinement method
 // (MM of 000, the BB baseline) from the relaxation output under a budget of
 // communications. One tidy CSV row per (sigma, trial, algorithm).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -61,6 +62,11 @@ void check_experiment_command(const ExperimentCommand& cmd, MPI_Comm comm) {
     if (!find_algorithm(a) || find_algorithm(a)->phases.size() != 1)
       throw Error("--algorithms takes " + algorithm_names(", ", "", true));
   if (cmd.start != "relaxation" && cmd.start != "random") throw Error("--start must be relaxation or random");
+  // The relaxation rows are the starting points: a second run labelled the
+  // same would be mixed into the same aggregate row (twice the trials).
+  if (cmd.start == "relaxation" &&
+      std::count(cmd.algorithms.begin(), cmd.algorithms.end(), algorithm_info(AlgorithmId::kRelaxation).name))
+    throw Error("--algorithms relaxation needs --start random (with --start relaxation it is the starting point)");
   if (!(cmd.tol >= 0)) throw Error("--tol must be >= 0");
   check_output_path(cmd.output, comm);
   if (!cmd.trajectory.empty()) check_output_path(cmd.trajectory, comm);
