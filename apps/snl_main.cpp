@@ -165,6 +165,7 @@ int run_command(Commands& c, MPI_Comm comm) {
   } else if (*c.info_cmd) {
     snl::run_info(c.info, comm);
   } else if (*c.solve_cmd) {
+    c.solve.check_monotone_given = c.solve_cmd->count("--check-monotone") > 0;
     return snl::run_solve(c.solve, comm);
   } else if (*c.eval_cmd) {
     snl::run_eval(c.eval, comm);

@@ -65,6 +65,11 @@ struct LoadedProblem {
 PartitionMethod check_solve_command(const SolveCommand& cmd, MPI_Comm comm) {
   const std::string unsupported = cmd.solver.unsupported_option();
   if (!unsupported.empty()) throw UsageError(unsupported);
+  // Only an explicit flag: its default is on in debug builds, for every method.
+  const AlgorithmInfo* alg = find_algorithm(cmd.solver.algorithm);
+  if (cmd.check_monotone_given && alg && !alg->monotone_surrogate)
+    throw UsageError("--check-monotone is not honoured by --algorithm " + cmd.solver.algorithm + " (only by " +
+                     algorithms_with(&AlgorithmInfo::monotone_surrogate) + "); leave it out");
   const std::string bad = cmd.solver.validate();
   if (!bad.empty()) throw Error(bad);
   const PartitionMethod pm = parse_partition_method(cmd.partition);
@@ -127,6 +132,18 @@ std::vector<double> initial_positions(const SolveCommand& cmd, const Localizatio
   block_range(prob.num_sensors(), comm_size(comm), comm_rank(comm), b, e);
   const auto rows = read_positions(cmd.init, comm, prob.num_sensors(), prob.dim(), b, e - b);
   return prob.file_rows_to_owned(rows, b, prob.dim());
+}
+
+// With --restart: checks the checkpoint against this network and these options
+// (as the Solver does, before any work) and says where the run resumes.
+void report_restart(const SolveCommand& cmd, const LoadedProblem& lp, bool talk, MPI_Comm comm) {
+  if (cmd.restart.empty()) return;
+  const H5File f(cmd.restart, comm, H5File::Mode::kRead);
+  const CheckpointHeader h = read_checkpoint_header(f, lp.fingerprint, checkpoint_options(cmd.solver));
+  if (talk)
+    std::fprintf(stderr, "snl solve: resuming from %s at %s iteration %lld (total iteration %lld)\n",
+                 cmd.restart.c_str(), h.phase_algorithm.c_str(), static_cast<long long>(h.phase_iteration),
+                 static_cast<long long>(h.total_iteration));
 }
 
 Summary run_solver(const SolveCommand& cmd, LoadedProblem& lp, const std::vector<double>& x0,
@@ -280,6 +297,7 @@ int run_solve(const SolveCommand& cmd, MPI_Comm comm) {
   LoadedProblem lp = load_problem(cmd, pm, talk, comm);
   t.read = lp.t_read;
   t.setup = lp.t_setup;
+  report_restart(cmd, lp, talk, comm);
   const std::vector<double> x0 = initial_positions(cmd, *lp.prob, comm);
   std::vector<double> x;
   const Summary s = run_solver(cmd, lp, x0, &x, comm);

@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <sstream>
+#include <utility>
 
 #include "snl/core/mpi_util.hpp"
 #include "snl/core/random.hpp"
@@ -235,6 +237,57 @@ std::vector<double> history_column(const std::vector<IterationSummary>& h, const
 // ---------------------------------------------------------------------------
 // Checkpoint files: header attributes, history columns, algorithm state.
 
+namespace {
+
+// Async and async-exact draw their activation sequence from (seed, count).
+bool seed_drives_iterates(const std::string& algorithm) {
+  const AlgorithmInfo* a = find_algorithm(algorithm);
+  if (!a) return false;
+  for (AlgorithmId id : a->phases)
+    if (id == AlgorithmId::kAsync || id == AlgorithmId::kAsyncExact) return true;
+  return false;
+}
+
+// checkpoint_options() as (flag, value) pairs: "mm|max_iter=5" -> (--algorithm, mm), (--max-iter, 5).
+std::vector<std::pair<std::string, std::string>> option_items(const std::string& s) {
+  std::vector<std::pair<std::string, std::string>> out;
+  std::size_t b = 0;
+  while (b <= s.size()) {
+    std::size_t e = s.find('|', b);
+    if (e == std::string::npos) e = s.size();
+    const std::string item = s.substr(b, e - b);
+    const std::size_t eq = item.find('=');
+    if (eq == std::string::npos) {
+      out.emplace_back("--algorithm", item);
+    } else {
+      std::string flag = "--" + item.substr(0, eq);
+      std::replace(flag.begin(), flag.end(), '_', '-');
+      out.emplace_back(flag, item.substr(eq + 1));
+    }
+    b = e + 1;
+  }
+  return out;
+}
+
+// "--seed 1 in the checkpoint, 2 now" for the first option that differs.
+std::string first_option_difference(const std::string& then, const std::string& now) {
+  const auto a = option_items(then), b = option_items(now);
+  auto value = [](const std::vector<std::pair<std::string, std::string>>& v, const std::string& flag) {
+    for (const auto& kv : v)
+      if (kv.first == flag) return kv.second;
+    return std::string("its default");
+  };
+  auto all = a;
+  all.insert(all.end(), b.begin(), b.end());
+  for (const auto& kv : all) {
+    const std::string x = value(a, kv.first), y = value(b, kv.first);
+    if (x != y) return kv.first + " " + x + " in the checkpoint, " + y + " now";
+  }
+  return "options " + then + " in the checkpoint, " + now + " now";
+}
+
+}  // namespace
+
 void write_checkpoint(const std::string& path, const LocalizationProblem& prob, const CheckpointHeader& h,
                       const std::vector<IterationSummary>& history, const Algorithm& alg) {
   static const double delay = [] {
@@ -270,6 +323,17 @@ void write_checkpoint(const std::string& path, const LocalizationProblem& prob, 
   f.commit();
 }
 
+std::string checkpoint_options(const SolverOptions& opt) {
+  std::ostringstream os;
+  os.precision(17);
+  os << opt.algorithm << "|max_iter=" << opt.max_iter << "|tol=" << opt.tol << "|grad_tol=" << opt.grad_tol
+     << "|history_every=" << opt.history_every << "|bb_rounds=" << opt.bb_rounds;
+  // Only when they matter, so that earlier checkpoints still match.
+  if (opt.temporal_block != 1) os << "|temporal_block=" << opt.temporal_block;
+  if (seed_drives_iterates(opt.algorithm)) os << "|seed=" << opt.seed;
+  return os.str();
+}
+
 CheckpointHeader read_checkpoint_header(const H5File& f, const std::string& network_fingerprint,
                                         const std::string& options) {
   const std::string what = f.path() + ": ";
@@ -280,10 +344,13 @@ CheckpointHeader read_checkpoint_header(const H5File& f, const std::string& netw
     throw Error(what + "checkpoint of another network (fingerprint " + f.attr_string("network_fingerprint") +
                 ", this network " + network_fingerprint + ")");
   if (f.attr_string("options") != options)
-    throw Error(what + "checkpoint of incompatible options (" + f.attr_string("options") + "; now " + options + ")");
+    throw Error(what + "checkpoint of incompatible options: " + first_option_difference(f.attr_string("options"), options) +
+                "; a restart must repeat it (checkpoint: " + f.attr_string("options") + ")");
   CheckpointHeader h;
   h.network_fingerprint = network_fingerprint;
   h.options = options;
+  h.algorithm = f.attr_string("algorithm");
+  h.phase_algorithm = f.attr_string("phase_algorithm");
   h.phase = f.attr_int("phase");
   h.phase_iteration = f.attr_int("phase_iteration");
   h.total_iteration = f.attr_int("total_iteration");

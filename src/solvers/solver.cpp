@@ -75,15 +75,7 @@ Solver::Solver(LocalizationProblem& prob, SolverOptions opt) : prob_(prob), opt_
   if (!err.empty()) throw Error(err);
 }
 
-std::string Solver::options_fingerprint() const {
-  std::ostringstream os;
-  os.precision(17);
-  os << opt_.algorithm << "|max_iter=" << opt_.max_iter << "|tol=" << opt_.tol << "|grad_tol=" << opt_.grad_tol
-     << "|history_every=" << opt_.history_every << "|bb_rounds=" << opt_.bb_rounds;
-  // Only when on, so that earlier checkpoints still match.
-  if (opt_.temporal_block != 1) os << "|temporal_block=" << opt_.temporal_block;
-  return os.str();
-}
+std::string Solver::options_fingerprint() const { return checkpoint_options(opt_); }
 
 
 // ---------------------------------------------------------------------------

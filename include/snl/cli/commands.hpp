@@ -48,6 +48,8 @@ struct SolveCommand {
   std::string restart;                  ///< --restart CKPT.h5
   bool quiet = false;
   bool strict = false;  ///< refuse networks with unlocalizable sensors
+  /// --check-monotone was on the command line (solver.check_monotone is also on by default in debug builds)
+  bool check_monotone_given = false;
   double progress_seconds = 2.0;
 };
 /// Returns the process exit status (0 on success).

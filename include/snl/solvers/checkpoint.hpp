@@ -56,6 +56,24 @@ class StateReader {
 };
 
 class Algorithm;
+struct SolverOptions;
+
+/// What a checkpoint must match to be resumed, as "algorithm|key=value|...":
+/// every option that changes the iterates or the iteration at which a phase
+/// stops, so that a resumed run ends with the uninterrupted run's bytes.
+///   --algorithm        the state's layout and the phases
+///   --max-iter         where a phase ends (the pipeline's MM starts there), the
+///                      pass boundaries and, with --history-every 0, the history spacing
+///   --tol, --grad-tol  where a phase stops (the pipeline's MM starts there)
+///   --history-every    which iterations are recorded; with --temporal-block, the pass boundaries
+///   --bb-rounds        BB's iterates
+///   --temporal-block   where tolerances are tested (pass ends); only when not 1
+///   --seed             async and async-exact only: their activation sequence is a
+///                      function of (seed, activation count)
+/// Need not match: --partition and the number of ranks (results are
+/// partition-independent), --init and --seed of other methods (the checkpoint
+/// holds the iterates; the start is not read), --check-monotone, output options.
+std::string checkpoint_options(const SolverOptions& opt);
 
 /// The root attributes of a checkpoint file (layout in docs/formats.md):
 /// where the run stands, and what it must match to be resumed.
@@ -76,8 +94,9 @@ struct CheckpointHeader {
 void write_checkpoint(const std::string& path, const LocalizationProblem& prob, const CheckpointHeader& header,
                       const std::vector<IterationSummary>& history, const Algorithm& alg);
 
-/// Checks that `f` is a checkpoint of the network and options given and
-/// returns its header; throws snl::Error (the same on every rank) otherwise.
+/// Checks that `f` is a checkpoint of the network and options given
+/// (checkpoint_options()) and returns its header; throws snl::Error (the same
+/// on every rank, naming the first option that differs) otherwise.
 CheckpointHeader read_checkpoint_header(const H5File& f, const std::string& network_fingerprint,
                                         const std::string& options);
 /// The history a checkpoint holds.

@@ -179,7 +179,7 @@ class Solver {
   Solver(LocalizationProblem& prob, SolverOptions opt);
   void add_callback(IterationCallback* cb) { callbacks_.push_back(cb); }
   void set_checkpointing(const CheckpointConfig& c) { ckpt_ = c; }
-  /// Fingerprint of the options that a checkpoint must match to be resumed.
+  /// Fingerprint of the options that a checkpoint must match to be resumed (checkpoint_options()).
   std::string options_fingerprint() const;
   Summary solve(const std::vector<double>& x0, std::vector<double>* x_out);
 
