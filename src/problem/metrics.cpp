@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <cstring>
 
+#include "core/exact_sum.hpp"
+
 namespace snl {
 
 namespace {
@@ -92,16 +94,17 @@ CostTerms costs_impl(const LocalizationProblem& prob, const double* x) {
   const auto& aid = prob.anchor_ids();
   const auto& ar = prob.anchor_ranges();
   const double* anc = prob.anchors().data();
-  CostTerms t;
+  // Exact sums of the per-edge terms: the same costs for any partition.
+  detail::ExactSum t[4];  // ml, relaxed, certificate, apriori
   auto term = [&](const double* z, double rho) {
     const double nz = norm<P>(z);
     const double ml = 0.5 * (nz - rho) * (nz - rho);
-    t.ml += ml;
+    t[0].add(ml);
     if (nz > rho)
-      t.relaxed += ml;  // d_B(rho)(z)^2 / 2 = (|z| - rho)^2 / 2 outside the ball
+      t[1].add(ml);  // d_B(rho)(z)^2 / 2 = (|z| - rho)^2 / 2 outside the ball
     else
-      t.certificate += ml;  // relaxed term is zero: eq. (22) collects the nonconvex one
-    t.apriori += 0.5 * rho * rho;
+      t[2].add(ml);  // relaxed term is zero: eq. (22) collects the nonconvex one
+    t[3].add(0.5 * rho * rho);
   };
   for (LocalId v = 0; v < gr.num_owned(); ++v) {
     const double* xv = x + std::size_t(v) * P;
@@ -120,9 +123,8 @@ CostTerms costs_impl(const LocalizationProblem& prob, const double* x) {
       term(z, ar[e]);
     }
   }
-  double loc[4] = {t.ml, t.relaxed, t.certificate, t.apriori}, glob[4];
-  MPI_Allreduce(loc, glob, 4, MPI_DOUBLE, MPI_SUM, prob.comm());
-  return {glob[0], glob[1], glob[2], glob[3]};
+  detail::allreduce_exact(t, 4, prob.comm());
+  return {t[0].value(), t[1].value(), t[2].value(), t[3].value()};
 }
 
 }  // namespace
@@ -164,23 +166,25 @@ ErrorMetrics evaluate_errors(const LocalizationProblem& prob, const double* x) {
   const int p = prob.dim();
   const auto& tr = prob.truth();
   const auto& fl = prob.flags();
-  double loc[5] = {0, 0, 0, 0, 0};  // sq, abs, sq_loc, abs_loc, count_loc
+  // Exact sums of the per-node terms: the same metrics for any partition.
+  detail::ExactSum sums[5];  // sq, abs, sq_loc, abs_loc, count_loc
   for (LocalId v = 0; v < prob.num_owned(); ++v) {
     double s = 0;
     for (int c = 0; c < p; ++c) {
       const double d = x[std::size_t(v) * p + c] - tr[std::size_t(v) * p + c];
       s += d * d;
     }
-    loc[0] += s;
-    loc[1] += std::sqrt(s);
+    sums[0].add(s);
+    sums[1].add(std::sqrt(s));
     if (!fl[v]) {
-      loc[2] += s;
-      loc[3] += std::sqrt(s);
-      loc[4] += 1;
+      sums[2].add(s);
+      sums[3].add(std::sqrt(s));
+      sums[4].add(1);
     }
   }
+  detail::allreduce_exact(sums, 5, prob.comm());
   double glob[5];
-  MPI_Allreduce(loc, glob, 5, MPI_DOUBLE, MPI_SUM, prob.comm());
+  for (int j = 0; j < 5; ++j) glob[j] = sums[j].value();
   const double n = static_cast<double>(prob.num_sensors());
   m.valid = true;
   m.rmse = std::sqrt(glob[0] / n);

@@ -118,6 +118,7 @@ class Async final : public Algorithm {
     prob_.graph().halo().exchange(x_.data(), prob_.dim());
     return evaluate_costs(prob_, x_.data()).relaxed;
   }
+  const double* previous_positions() const override { return prev_.data(); }
   void change_norms(double* d, double* s) const override {
     *d = diff_sq_;
     *s = x_sq_;

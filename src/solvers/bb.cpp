@@ -124,6 +124,8 @@ class BB final : public Algorithm {
     *s = x_sq_;
   }
   double grad_norm_sq() const override { return gsq_; }
+  const double* previous_positions() const override { return x_old_.data(); }
+  const double* gradient_rows() override { return g_.data(); }
   void save(StateWriter& w) const override {
     w.scalar("k", double(k_));
     w.node_rows("x", x_.data(), prob_.dim());

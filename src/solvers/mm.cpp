@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/exact_sum.hpp"
 #include "kernels/kernels.hpp"
 #include "snl/problem/metrics.hpp"
 #include "solvers/algorithm_util.hpp"
@@ -92,6 +93,7 @@ class MM final : public Algorithm {
     prob_.graph().halo().exchange(x_.data(), prob_.dim());
     return prob_.dim() == 2 ? surrogate<2>() : surrogate<3>();
   }
+  const double* previous_positions() const override { return xn_.data(); }
   void change_norms(double* d, double* s) const override {
     *d = diff_sq_;
     *s = x_sq_;
@@ -151,7 +153,7 @@ class MM final : public Algorithm {
     const auto& off = gr.offsets();
     const auto& adj = gr.adjacency();
     const auto& aoff = prob_.anchor_offsets();
-    double F = 0;
+    detail::ExactSum F;  // exact: the same surrogate for any partition
     for (LocalId v = 0; v < gr.num_owned(); ++v) {
       const GlobalId gv = gr.global_id(v);
       for (auto e = off[v]; e < off[v + 1]; ++e) {
@@ -162,7 +164,7 @@ class MM final : public Algorithm {
           const double r = x_[std::size_t(v) * P + c] - x_[std::size_t(u) * P + c] - y_[y_index(v, e, c)];
           s += r * r;
         }
-        F += 0.5 * s;
+        F.add(0.5 * s);
       }
       for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
         const double* a = &prob_.anchors()[std::size_t(prob_.anchor_ids()[e]) * P];
@@ -171,12 +173,11 @@ class MM final : public Algorithm {
           const double r = x_[std::size_t(v) * P + c] - a[c] - aw_[std::size_t(e) * P + c];
           s += r * r;
         }
-        F += 0.5 * s;
+        F.add(0.5 * s);
       }
     }
-    double G = 0;
-    MPI_Allreduce(&F, &G, 1, MPI_DOUBLE, MPI_SUM, prob_.comm());
-    return G;
+    detail::allreduce_exact(&F, 1, prob_.comm());
+    return F.value();
   }
 
   LocalizationProblem& prob_;

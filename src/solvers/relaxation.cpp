@@ -108,6 +108,16 @@ class Relaxation final : public Algorithm {
     *s = x_sq_;
   }
   double grad_norm_sq() const override { return gsq_; }
+  const double* previous_positions() const override { return prev_.data(); }
+  // The kernels sum the gradient norm per SIMD lane (partition-dependent):
+  // the gradient at w(k), which the last level read from w_next_, again per node.
+  const double* gradient_rows() override {
+    if (!w_ready_) return nullptr;
+    grad_.resize(std::size_t(prob_.num_owned()) * prob_.dim());
+    prob_.graph().halo().exchange(w_next_.data(), prob_.dim());
+    relaxed_gradient(prob_, w_next_.data(), grad_.data(), 0, prob_.num_owned());
+    return grad_.data();
+  }
   void save(StateWriter& w) const override {
     w.scalar("k", double(k_));
     w.node_rows("x", x_.data(), prob_.dim());
@@ -128,6 +138,7 @@ class Relaxation final : public Algorithm {
   int levels_;                 // iterations per pass at most (SolverOptions::temporal_block)
   detail::LevelPlan plan_;
   std::vector<double> norms_;  // per level and lane: ||x(k) - x(k-1)||^2, ||x(k)||^2, ||g||^2
+  std::vector<double> grad_;   // gradient_rows(), sized on first use
   bool stream_ = false;        // non-temporal row stores (kernels.hpp)
   bool w_ready_ = false;
   std::int64_t k_ = 0;

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "core/exact_sum.hpp"
 #include "snl/core/mpi_util.hpp"
 
 namespace snl {
@@ -106,21 +107,24 @@ class Solver::Run {
   // What the one reduction per pass tells every rank.
   struct PassResult {
     double rel = 0, gnorm = 0;
+    bool has_gnorm = false;  // gnorm was reduced (grad-tol, or a record is due)
     bool finite = true;
     bool signalled = false;  // a stop signal on some rank
     bool clock = false;      // rank 0's checkpoint clock ran out
   };
 
+  void add_stop_terms(Phase& ph, bool with_grad, detail::ExactSum* sums);
+  double grad_norm(Phase& ph);
   void start_phase(Phase& ph);
   void set_pass_sizes(Phase& ph) const;
   bool pass(Phase& ph);  // false: the phase ends
   std::int64_t pass_length(const Phase& ph) const;
   void iterate(Phase& ph, std::int64_t n);
-  PassResult reduce(const Phase& ph);
+  PassResult reduce(Phase& ph);
   bool test_stop(Phase& ph, const PassResult& r) const;
   void check_monotone(Phase& ph);
   void record_start(const Phase& ph);
-  bool record(const Phase& ph, const PassResult& r);  // true: a callback asked to stop
+  bool record(Phase& ph, const PassResult& r);  // true: a callback asked to stop
   void checkpoint(const Phase& ph);
   bool stop(Phase& ph, TerminationType t, std::string msg);
   void end_phase(Phase& ph);
@@ -299,23 +303,73 @@ void Solver::Run::iterate(Phase& ph, std::int64_t n) {
 }
 
 // One reduction per pass: stopping sums, and flags every rank must agree on
-// (a stop signal on any rank; rank 0's checkpoint clock).
-Solver::Run::PassResult Solver::Run::reduce(const Phase& ph) {
-  double loc[5] = {0, 0, 0, 0, 0}, glob[5];
-  ph.alg->change_norms(&loc[0], &loc[1]);
-  loc[2] = ph.alg->grad_norm_sq();
-  if (!std::isfinite(loc[2])) loc[2] = 0;
-  loc[3] = (ckpt_.stop_on_signal && stop_signal_received()) ? 1 : 0;
-  loc[4] = (root_ && checkpointing_ && ckpt_.seconds > 0 && MPI_Wtime() - last_ckpt_ >= ckpt_.seconds) ? 1 : 0;
-  MPI_Allreduce(loc, glob, 3, MPI_DOUBLE, MPI_SUM, comm_);
-  MPI_Allreduce(loc + 3, glob + 3, 2, MPI_DOUBLE, MPI_MAX, comm_);
+// (a stop signal on any rank; rank 0's checkpoint clock). The sums are exact
+// (detail::ExactSum), so the stopping test is the same for any partition; the
+// gradient is summed only where --grad-tol or a record needs it.
+Solver::Run::PassResult Solver::Run::reduce(Phase& ph) {
+  const bool with_grad = opt_.grad_tol > 0 || ph.k % ph.every == 0 || ph.k == opt_.max_iter;
+  detail::ExactSum sums[3];  // ||x(k)-x(k-1)||^2, ||x(k)||^2, ||g||^2
+  add_stop_terms(ph, with_grad, sums);
+  double flags[2] = {(ckpt_.stop_on_signal && stop_signal_received()) ? 1.0 : 0.0,
+                     (root_ && checkpointing_ && ckpt_.seconds > 0 && MPI_Wtime() - last_ckpt_ >= ckpt_.seconds) ? 1.0 : 0.0},
+         glob[2];
+  detail::allreduce_exact(sums, with_grad ? 3 : 2, comm_);
+  MPI_Allreduce(flags, glob, 2, MPI_DOUBLE, MPI_MAX, comm_);
+  const double d = sums[0].value(), x = sums[1].value();
   PassResult r;
-  r.rel = glob[1] > 0 ? std::sqrt(glob[0] / glob[1]) : std::sqrt(glob[0]);
-  r.gnorm = std::sqrt(glob[2]);
-  r.finite = std::isfinite(glob[0]) && std::isfinite(glob[1]);
-  r.signalled = glob[3] > 0;
-  r.clock = glob[4] > 0;
+  r.rel = x > 0 ? std::sqrt(d / x) : std::sqrt(d);
+  r.gnorm = std::sqrt(sums[2].value());
+  r.has_gnorm = with_grad;
+  r.finite = std::isfinite(d) && std::isfinite(x);
+  r.signalled = glob[0] > 0;
+  r.clock = glob[1] > 0;
   return r;
+}
+
+// This rank's terms of the stopping sums: per owned node where the method
+// keeps x(k-1) and its gradient (the same terms for any partition), else the
+// method's own partial sums.
+void Solver::Run::add_stop_terms(Phase& ph, bool with_grad, detail::ExactSum* sums) {
+  const LocalId n = prob_.num_owned();
+  const double* x = ph.alg->positions().data();
+  if (const double* prev = ph.alg->previous_positions()) {
+    for (LocalId v = 0; v < n; ++v) {
+      double dd = 0, xs = 0;
+      for (int c = 0; c < p_; ++c) {
+        const std::size_t t = std::size_t(v) * p_ + c;
+        dd += (x[t] - prev[t]) * (x[t] - prev[t]);
+        xs += x[t] * x[t];
+      }
+      sums[0].add(dd);
+      sums[1].add(xs);
+    }
+  } else {
+    double d = 0, s = 0;
+    ph.alg->change_norms(&d, &s);
+    sums[0].add(d);
+    sums[1].add(s);
+  }
+  if (!with_grad || !std::isfinite(ph.alg->grad_norm_sq())) return;
+  const std::int64_t b0 = halo_.bytes_sent();  // a ghost exchange here is instrumentation
+  const double* g = ph.alg->gradient_rows();
+  instrumentation_bytes_ += halo_.bytes_sent() - b0;
+  if (!g) {
+    sums[2].add(ph.alg->grad_norm_sq());
+    return;
+  }
+  for (LocalId v = 0; v < n; ++v) {
+    double gs = 0;
+    for (int c = 0; c < p_; ++c) gs += g[std::size_t(v) * p_ + c] * g[std::size_t(v) * p_ + c];
+    sums[2].add(gs);
+  }
+}
+
+// Collective: the gradient norm where the pass's reduction left it out.
+double Solver::Run::grad_norm(Phase& ph) {
+  detail::ExactSum sums[3];
+  add_stop_terms(ph, true, sums);
+  detail::allreduce_exact(&sums[2], 1, comm_);
+  return std::sqrt(sums[2].value());
 }
 
 bool Solver::Run::test_stop(Phase& ph, const PassResult& r) const {
@@ -351,14 +405,14 @@ void Solver::Run::record_start(const Phase& ph) {
   sum_.history.push_back(it);
 }
 
-bool Solver::Run::record(const Phase& ph, const PassResult& r) {
+bool Solver::Run::record(Phase& ph, const PassResult& r) {
   IterationSummary it;
   it.phase = ph.alg->name();
   it.iteration = ph.k;
   it.total_iteration = total_it_;
   it.cost = objective_of(*ph.alg);
   it.rel_change = r.rel;
-  it.grad_norm = std::isfinite(ph.alg->grad_norm_sq()) ? r.gnorm : NAN;
+  it.grad_norm = !std::isfinite(ph.alg->grad_norm_sq()) ? NAN : r.has_gnorm ? r.gnorm : grad_norm(ph);
   it.messages = messages_;
   it.reals = reals_;
   it.elapsed = MPI_Wtime() - t0_;

@@ -135,6 +135,14 @@ class Algorithm {
   virtual void change_norms(double* diff_sq, double* x_sq) const = 0;
   /// This rank's squared norm of the last gradient computed (NaN if none).
   virtual double grad_norm_sq() const { return std::numeric_limits<double>::quiet_NaN(); }
+  /// x(k-1), owned rows valid. With positions(), the solver sums the per-node
+  /// terms of the stopping test exactly, so the test (and so the stopping
+  /// iteration) is the same for any partition; nullptr: change_norms() is used.
+  virtual const double* previous_positions() const { return nullptr; }
+  /// Collective (may exchange ghost rows): owned rows of the gradient whose
+  /// norm grad_norm_sq() gives, summed per node exactly by the solver;
+  /// nullptr: grad_norm_sq() is used.
+  virtual const double* gradient_rows() { return nullptr; }
   /// Per sensor per iteration (spec: one broadcast of a p-vector = 1 message, p reals).
   virtual double messages_per_iteration() const { return 1.0; }
   virtual double reals_per_iteration() const = 0;
