@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # snl eval's numbers against an independent computation (numpy, written from
-# /work/shared/spec/algorithms.md) on the files themselves:
+# the shared spec algorithms.md) on the files themselves:
 #  - ML cost f and f_hat with the 1/2, the sum of nonconvex terms of the edges
 #    inside their disk (003 eq. 22), the a-priori bound (eq. 23), RMSE and MPE
 #    per sensor (1/n), and with --crlb the Cramér-Rao bound sqrt(tr(J^-1)/n),

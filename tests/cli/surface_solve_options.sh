@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # snl solve's --init FILE, --grad-tol and --strict do what they say, checked on
-# the values (numpy / h5py, from /work/shared/spec/algorithms.md):
+# the values (numpy / h5py, from the shared spec algorithms.md):
 #  - --init FILE --max-iter 0 returns the file's positions exactly, for every
 #    algorithm, on 1 and 2 ranks; a plain file with only `positions` works;
 #  - --init FILE --max-iter 1 continues from those positions: the relaxation's

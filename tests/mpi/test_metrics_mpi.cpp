@@ -1,5 +1,5 @@
 // The core metrics (src/problem/metrics.cpp, src/problem/analysis.cpp) against
-// computations written out here, following /work/shared/spec/algorithms.md:
+// computations written out here, following the shared spec algorithms.md:
 // ML cost f and relaxed cost f_hat with the 1/2, the gap certificate (003
 // eq. 22), the a-priori bound (eq. 23), RMSE and MPE per sensor (1/n), the
 // gradients, and the CRLB sqrt(tr(J^-1)/n) with J at the true positions.

@@ -2,7 +2,7 @@
 // Consensus optimisation problems (seed 001): minimise F(x) = sum_p f_p(x) over a
 // connected network in which only node p knows its strictly convex f_p.
 // This header is the contract between the problem side (file format of
-// /work/shared/spec/consensus.md -> docs/formats.md, generator, validation, the
+// the shared spec consensus.md, documented in docs/consensus.md; generator, validation, the
 // local objectives) and the distributed solvers (src/consensus/*).
 #include <mpi.h>
 
