@@ -1,5 +1,5 @@
 // libFuzzer target (issue #5): the in-memory validation and duplicate merging
-// of measurement lists (src/validate.cpp; no MPI, no HDF5). Bytes decode into a
+// of measurement lists (src/io/validate.cpp; no MPI, no HDF5). Bytes decode into a
 // small Network with arbitrary integers and doubles (NaN, Inf, negatives,
 // out-of-range ids, odd shapes); check_network/validate_network must only ever
 // throw snl::Error; on a valid network merge_duplicates must keep its contract.

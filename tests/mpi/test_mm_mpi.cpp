@@ -1,4 +1,4 @@
-// MM (000, Alg. 1; src/solvers/algorithms.cpp) on 1, 2 and 3 ranks: the
+// MM (000, Alg. 1; src/solvers/mm.cpp) on 1, 2 and 3 ranks: the
 // iterates of the serial reference twin, and a surrogate that never increases.
 #include <gtest/gtest.h>
 #include <mpi.h>

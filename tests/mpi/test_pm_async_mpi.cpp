@@ -1,4 +1,4 @@
-// The sequential methods run in parallel (src/solvers/alg_sequential.cpp):
+// The sequential methods run in parallel (src/solvers/pm.cpp, async.cpp):
 // the distributed Jones-Plassmann colouring equals the serial one, and PM and
 // async / async-exact give the iterates of their one-at-a-time reference.
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// The disk relaxation (003, Alg. 1; src/solvers/algorithms.cpp): the same
+// The disk relaxation (003, Alg. 1; src/solvers/relaxation.cpp): the same
 // iterates as the serial reference twin on any number of ranks, the Nesterov
 // rate, and exact recovery where the relaxation is tight.
 #include <gtest/gtest.h>

@@ -1,4 +1,4 @@
-// MM (000, Algorithm 1; src/solvers/algorithms.cpp), serially: it never
+// MM (000, Algorithm 1; src/solvers/mm.cpp), serially: it never
 // increases its surrogate F(z), and f(x) <= F(z): checked at every iteration
 // over many random networks and noise levels, on the reference twin and on
 // the distributed solver (whose check_monotone option throws on any

@@ -1,4 +1,4 @@
-// The async method (src/solvers/alg_sequential.cpp), serially: 003 Algorithm 2
+// The async method (src/solvers/async.cpp), serially: 003 Algorithm 2
 // with the spec's corrected local problem (weight 1/2, L_i = delta_i + |A_i|):
 // no activation increases f_hat, exact or inexact (eq. 20), on the reference
 // twin; and the solver's async / async-exact ends where the twin does.
