@@ -1,6 +1,7 @@
 // Network files (shared spec: network-format.md): collective slab reader and
 // serial atomic writer.
 #include <string>
+#include <type_traits>
 
 #include "snl/io/h5file.hpp"
 #include "snl/core/mpi_util.hpp"
@@ -79,6 +80,15 @@ NetworkHeader read_header(const H5File& f) {
   h.has_localizability = f.has_dataset("localizability/flags");
   if (h.has_localizability)
     expect_shape(f, "localizability/flags", f.shape("localizability/flags"), {n}, " ([num_sensors])");
+  const auto optional_rows = [&](const char* name, std::uint64_t rows, const char* why) {
+    if (!f.has_dataset(name)) return false;
+    expect_shape(f, name, f.shape(name), {rows}, why);
+    return true;
+  };
+  h.has_sensor_sigmas = optional_rows("sensor_sigmas", se[0], " (one sigma per row of sensor_edges)");
+  h.has_anchor_sigmas = optional_rows("anchor_sigmas", ae[0], " (one sigma per row of anchor_edges)");
+  h.has_sensor_nlos = optional_rows("sensor_nlos", se[0], " (one flag per row of sensor_edges)");
+  h.has_anchor_nlos = optional_rows("anchor_nlos", ae[0], " (one flag per row of anchor_edges)");
   return h;
 }
 
@@ -106,11 +116,15 @@ Network read_network(const std::string& path, MPI_Comm comm) {
   net.sensor_edge_offset = b;
   net.sensor_edges = f.read_rows_int("sensor_edges", u(b), u(e - b));
   net.sensor_ranges = f.read_rows_double("sensor_ranges", u(b), u(e - b));
+  if (h.has_sensor_sigmas) net.sensor_sigmas = f.read_rows_double("sensor_sigmas", u(b), u(e - b));
+  if (h.has_sensor_nlos) net.sensor_nlos = f.read_rows_u8("sensor_nlos", u(b), u(e - b));
 
   block_range(h.num_anchor_edges, size, rank, b, e);
   net.anchor_edge_offset = b;
   net.anchor_edges = f.read_rows_int("anchor_edges", u(b), u(e - b));
   net.anchor_ranges = f.read_rows_double("anchor_ranges", u(b), u(e - b));
+  if (h.has_anchor_sigmas) net.anchor_sigmas = f.read_rows_double("anchor_sigmas", u(b), u(e - b));
+  if (h.has_anchor_nlos) net.anchor_nlos = f.read_rows_u8("anchor_nlos", u(b), u(e - b));
 
   block_range(h.num_sensors, size, rank, b, e);
   net.sensor_row_offset = b;
@@ -164,6 +178,13 @@ void write_network(const std::string& path, const Network& net) {
     f.write_rows("truth", rows, p, 0, net.truth.data(), rows);
   }
   if (net.sigma) f.write_scalar("sigma", *net.sigma);
+  const auto write_optional = [&](const char* name, const auto& v) {
+    if (!v.empty()) f.write_rows(name, v.size(), 0, 0, v.data(), v.size());
+  };
+  write_optional("sensor_sigmas", net.sensor_sigmas);
+  write_optional("anchor_sigmas", net.anchor_sigmas);
+  write_optional("sensor_nlos", net.sensor_nlos);
+  write_optional("anchor_nlos", net.anchor_nlos);
   if (!net.localizability.empty()) {
     const std::uint64_t n = net.localizability.size();
     f.write_rows("localizability/flags", n, 0, 0, net.localizability.data(), n);
@@ -186,10 +207,18 @@ Network network_slab(const Network& w, MPI_Comm comm) {
   block_range(w.local_sensor_edges(), size, rank, b, e);
   s.sensor_edges.assign(w.sensor_edges.begin() + 2 * b, w.sensor_edges.begin() + 2 * e);
   s.sensor_ranges.assign(w.sensor_ranges.begin() + b, w.sensor_ranges.begin() + e);
+  const auto slice = [](const auto& v, GlobalId lo, GlobalId hi) {
+    using V = std::decay_t<decltype(v)>;
+    return v.empty() ? V() : V(v.begin() + lo, v.begin() + hi);
+  };
+  s.sensor_sigmas = slice(w.sensor_sigmas, b, e);
+  s.sensor_nlos = slice(w.sensor_nlos, b, e);
   s.sensor_edge_offset = b;
   block_range(w.local_anchor_edges(), size, rank, b, e);
   s.anchor_edges.assign(w.anchor_edges.begin() + 2 * b, w.anchor_edges.begin() + 2 * e);
   s.anchor_ranges.assign(w.anchor_ranges.begin() + b, w.anchor_ranges.begin() + e);
+  s.anchor_sigmas = slice(w.anchor_sigmas, b, e);
+  s.anchor_nlos = slice(w.anchor_nlos, b, e);
   s.anchor_edge_offset = b;
   block_range(w.num_sensors, size, rank, b, e);
   if (w.has_truth) s.truth.assign(w.truth.begin() + b * p, w.truth.begin() + e * p);

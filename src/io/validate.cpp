@@ -14,7 +14,8 @@ namespace {
 // Dataset order of NetworkIssue keys: the key is (order << 40) + 1 + row, so a
 // shape problem of a dataset (row -1) comes before its first bad row.
 enum Order : std::int64_t {
-  kHeader = 0, kAnchors, kSensorEdges, kSensorRanges, kAnchorEdges, kAnchorRanges, kTruth, kSigma, kFlags
+  kHeader = 0, kAnchors, kSensorEdges, kSensorRanges, kAnchorEdges, kAnchorRanges, kTruth, kSigma, kFlags,
+  kSensorSigmas, kAnchorSigmas, kSensorNlos, kAnchorNlos
 };
 
 NetworkIssue issue(Order o, GlobalId row, std::string msg) {
@@ -52,6 +53,39 @@ NetworkIssue check_ranges(Order o, const char* name, const std::vector<double>& 
     if (!std::isfinite(d)) return issue(o, row, std::string(name) + " row " + s(row) + ": range is " + num(d));
     if (d < 0) return issue(o, row, std::string(name) + " row " + s(row) + ": range " + num(d) + " is negative");
   }
+  return {};
+}
+
+constexpr double kMinSigma = 1e-150, kMaxSigma = 1e150;
+
+/// Optional per-row sigmas: absent, or one finite positive value per range.
+NetworkIssue check_sigmas(Order o, const char* name, const std::vector<double>& sg, std::size_t rows,
+                          GlobalId offset) {
+  if (sg.empty()) return {};
+  if (sg.size() != rows)
+    return issue(o, -1, std::string(name) + ": " + s(static_cast<GlobalId>(sg.size())) + " values, expected one per range (" +
+                            s(static_cast<GlobalId>(rows)) + ")");
+  for (std::size_t e = 0; e < sg.size(); ++e)
+    if (!(sg[e] >= kMinSigma && sg[e] <= kMaxSigma)) {  // weights 1/sigma^2 must be finite and non-zero
+      const GlobalId row = offset + static_cast<GlobalId>(e);
+      return issue(o, row, std::string(name) + " row " + s(row) + ": sigma " + num(sg[e]) +
+                               " is outside [1e-150, 1e150] (weights 1/sigma^2 must be finite and positive)");
+    }
+  return {};
+}
+
+/// Optional per-row NLOS flags: absent, or one 0/1 value per range.
+NetworkIssue check_flags01(Order o, const char* name, const std::vector<std::uint8_t>& f, std::size_t rows,
+                           GlobalId offset) {
+  if (f.empty()) return {};
+  if (f.size() != rows)
+    return issue(o, -1, std::string(name) + ": " + s(static_cast<GlobalId>(f.size())) + " values, expected one per range (" +
+                            s(static_cast<GlobalId>(rows)) + ")");
+  for (std::size_t e = 0; e < f.size(); ++e)
+    if (f[e] > 1) {
+      const GlobalId row = offset + static_cast<GlobalId>(e);
+      return issue(o, row, std::string(name) + " row " + s(row) + ": flag " + s(f[e]) + " is not 0 or 1");
+    }
   return {};
 }
 
@@ -131,6 +165,18 @@ NetworkIssue check_network(const Network& net, bool whole) {
     if (whole ? rows != n : net.sensor_row_offset + rows > n)
       return issue(kFlags, -1, "localizability/flags: " + s(rows) + " values, expected num_sensors = " + s(n));
   }
+  if (auto i = check_sigmas(kSensorSigmas, "sensor_sigmas", net.sensor_sigmas, net.sensor_ranges.size(),
+                            net.sensor_edge_offset); !i.ok())
+    return i;
+  if (auto i = check_sigmas(kAnchorSigmas, "anchor_sigmas", net.anchor_sigmas, net.anchor_ranges.size(),
+                            net.anchor_edge_offset); !i.ok())
+    return i;
+  if (auto i = check_flags01(kSensorNlos, "sensor_nlos", net.sensor_nlos, net.sensor_ranges.size(),
+                             net.sensor_edge_offset); !i.ok())
+    return i;
+  if (auto i = check_flags01(kAnchorNlos, "anchor_nlos", net.anchor_nlos, net.anchor_ranges.size(),
+                             net.anchor_edge_offset); !i.ok())
+    return i;
   return {};
 }
 
@@ -144,11 +190,16 @@ void validate_network(const Network& net) {
 
 namespace {
 
-/// Sorts rows (a, b, r) by (a, b, r) and averages the ranges of equal (a, b).
-/// Returns the number of rows removed.
-GlobalId merge_rows(std::vector<GlobalId>& edges, std::vector<double>& ranges) {
+/// Sorts rows (a, b, r) by (a, b, r) and merges the rows of equal (a, b): the
+/// mean of their ranges, or with sigmas the inverse-variance weighted mean and
+/// the combined sigma; NLOS flags are or-ed. Returns the number of rows removed.
+GlobalId merge_rows(std::vector<GlobalId>& edges, std::vector<double>& ranges, MeasurementExtras x) {
   const std::size_t E = ranges.size();
   if (edges.size() != 2 * E) throw Error("merge_duplicates: edges and ranges disagree in length");
+  std::vector<double>* sg = x.sigmas && !x.sigmas->empty() ? x.sigmas : nullptr;
+  std::vector<std::uint8_t>* fl = x.nlos && !x.nlos->empty() ? x.nlos : nullptr;
+  if ((sg && sg->size() != E) || (fl && fl->size() != E))
+    throw Error("merge_duplicates: per-row sigmas or flags disagree in length with the ranges");
   // Fast path: already sorted with distinct pairs (e.g. generator output).
   bool sorted = true;
   for (std::size_t e = 1; e < E && sorted; ++e)
@@ -157,36 +208,49 @@ GlobalId merge_rows(std::vector<GlobalId>& edges, std::vector<double>& ranges) {
 
   struct Row {
     GlobalId a, b;
-    double r;
+    double r, sigma;
+    std::uint8_t flag;
   };
   std::vector<Row> rows(E);
-  for (std::size_t e = 0; e < E; ++e) rows[e] = {edges[2 * e], edges[2 * e + 1], ranges[e]};
-  // Ranges are part of the key, so equal pairs meet in ascending range order and
-  // the average does not depend on the input order.
-  std::sort(rows.begin(), rows.end(), [](const Row& x, const Row& y) {
-    if (x.a != y.a) return x.a < y.a;
-    if (x.b != y.b) return x.b < y.b;
-    return x.r < y.r;
+  for (std::size_t e = 0; e < E; ++e)
+    rows[e] = {edges[2 * e], edges[2 * e + 1], ranges[e], sg ? (*sg)[e] : 1.0, fl ? (*fl)[e] : std::uint8_t{0}};
+  // Ranges (then sigmas) are part of the key, so equal pairs meet in a fixed
+  // order and the merged value does not depend on the order of the input rows.
+  std::sort(rows.begin(), rows.end(), [](const Row& p, const Row& q) {
+    return std::tie(p.a, p.b, p.r, p.sigma, p.flag) < std::tie(q.a, q.b, q.r, q.sigma, q.flag);
   });
   std::size_t out = 0;
   for (std::size_t e = 0; e < E;) {
     std::size_t f = e;
-    double sum = 0.0;
-    while (f < E && rows[f].a == rows[e].a && rows[f].b == rows[e].b) sum += rows[f++].r;
-    edges[2 * out] = rows[e].a;
-    edges[2 * out + 1] = rows[e].b;
-    double avg = sum / static_cast<double>(f - e);
+    while (f < E && rows[f].a == rows[e].a && rows[f].b == rows[e].b) ++f;
+    const double cnt = static_cast<double>(f - e);
+    double sum = 0.0, wsum = 0.0;
+    std::uint8_t flag = 0;
+    for (std::size_t t = e; t < f; ++t) {
+      const double w = sg ? 1.0 / (rows[t].sigma * rows[t].sigma) : 1.0;
+      sum += w * rows[t].r;
+      wsum += w;
+      flag |= rows[t].flag;
+    }
+    double avg = sum / wsum;
     if (!std::isfinite(avg)) {  // the sum of huge ranges overflowed: average scaled terms
       avg = 0.0;
-      for (std::size_t t = e; t < f; ++t) avg += rows[t].r / static_cast<double>(f - e);
+      for (std::size_t t = e; t < f; ++t)
+        avg += sg ? rows[t].r * (1.0 / (rows[t].sigma * rows[t].sigma) / wsum) : rows[t].r / cnt;
     }
+    edges[2 * out] = rows[e].a;
+    edges[2 * out + 1] = rows[e].b;
     // Rounding must not take the mean outside [min, max] (rows are ascending).
     ranges[out] = f - e == 1 ? rows[e].r : std::min(std::max(avg, rows[e].r), rows[f - 1].r);
+    if (sg) (*sg)[out] = f - e == 1 ? rows[e].sigma : 1.0 / std::sqrt(wsum);
+    if (fl) (*fl)[out] = flag;
     ++out;
     e = f;
   }
   edges.resize(2 * out);
   ranges.resize(out);
+  if (sg) sg->resize(out);
+  if (fl) fl->resize(out);
   return static_cast<GlobalId>(E - out);
 }
 
@@ -197,8 +261,19 @@ MergeStats merge_duplicates(std::vector<GlobalId>& sensor_edges, std::vector<dou
   for (std::size_t e = 0; e + 1 < sensor_edges.size(); e += 2)
     if (sensor_edges[e] > sensor_edges[e + 1]) std::swap(sensor_edges[e], sensor_edges[e + 1]);
   MergeStats st;
-  st.merged_sensor_pairs = merge_rows(sensor_edges, sensor_ranges);
-  st.merged_anchor_pairs = merge_rows(anchor_edges, anchor_ranges);
+  st.merged_sensor_pairs = merge_rows(sensor_edges, sensor_ranges, {});
+  st.merged_anchor_pairs = merge_rows(anchor_edges, anchor_ranges, {});
+  return st;
+}
+
+MergeStats merge_duplicates(std::vector<GlobalId>& sensor_edges, std::vector<double>& sensor_ranges,
+                            MeasurementExtras sensor_extras, std::vector<GlobalId>& anchor_edges,
+                            std::vector<double>& anchor_ranges, MeasurementExtras anchor_extras) {
+  for (std::size_t e = 0; e + 1 < sensor_edges.size(); e += 2)
+    if (sensor_edges[e] > sensor_edges[e + 1]) std::swap(sensor_edges[e], sensor_edges[e + 1]);
+  MergeStats st;
+  st.merged_sensor_pairs = merge_rows(sensor_edges, sensor_ranges, sensor_extras);
+  st.merged_anchor_pairs = merge_rows(anchor_edges, anchor_ranges, anchor_extras);
   return st;
 }
 

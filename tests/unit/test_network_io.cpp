@@ -54,6 +54,24 @@ void expect_same(const Network& a, const Network& b) {
   EXPECT_EQ(a.truth, b.truth);
   EXPECT_EQ(a.sigma, b.sigma);
   EXPECT_EQ(a.localizability, b.localizability);
+  EXPECT_EQ(a.sensor_sigmas, b.sensor_sigmas);
+  EXPECT_EQ(a.anchor_sigmas, b.anchor_sigmas);
+  EXPECT_EQ(a.sensor_nlos, b.sensor_nlos);
+  EXPECT_EQ(a.anchor_nlos, b.anchor_nlos);
+}
+
+/// sample() with per-measurement sigmas and NLOS flags.
+Network sample_with_extras(GlobalId n = 6) {
+  Network net = sample(n);
+  for (std::size_t e = 0; e < net.sensor_ranges.size(); ++e) {
+    net.sensor_sigmas.push_back(0.01 + 0.001 * static_cast<double>(e));
+    net.sensor_nlos.push_back(static_cast<std::uint8_t>(e % 3 == 0));
+  }
+  for (std::size_t e = 0; e < net.anchor_ranges.size(); ++e) {
+    net.anchor_sigmas.push_back(0.02 + 0.001 * static_cast<double>(e));
+    net.anchor_nlos.push_back(static_cast<std::uint8_t>(e % 2));
+  }
+  return net;
 }
 
 using Override = std::function<void(H5File&)>;
@@ -108,6 +126,44 @@ TEST(NetworkIo, RoundTripFull) {
   EXPECT_EQ(back.anchor_edge_offset, 0);
   EXPECT_EQ(back.sensor_row_offset, 0);
   EXPECT_NO_THROW(validate_network(back));
+}
+
+TEST(NetworkIo, RoundTripPerMeasurementSigmasAndFlags) {
+  const std::string path = scratch("extras.h5");
+  const Network net = sample_with_extras();
+  write_network(path, net);
+  const Network back = read_network_serial(path);
+  expect_same(net, back);
+  EXPECT_FALSE(back.sensor_sigmas.empty());
+  EXPECT_FALSE(back.anchor_nlos.empty());
+  // Each rank's slab carries the rows of its edges.
+  const Network slab = network_slab(net, MPI_COMM_SELF);
+  EXPECT_EQ(slab.sensor_sigmas, net.sensor_sigmas);
+  EXPECT_EQ(slab.anchor_nlos, net.anchor_nlos);
+}
+
+TEST(NetworkIoBroken, PerMeasurementSigmaNotPositive) {
+  const std::string path = scratch("badsigmas.h5");
+  Network net = sample_with_extras();
+  net.anchor_sigmas[2] = 0.0;
+  write_network(path, net);
+  EXPECT_CONTAINS(read_error(path), "anchor_sigmas row 2: sigma 0 is outside");
+  net.anchor_sigmas[2] = 0.5;
+  net.sensor_sigmas[1] = std::numeric_limits<double>::quiet_NaN();
+  write_network(path, net);
+  EXPECT_CONTAINS(read_error(path), "sensor_sigmas row 1: sigma NaN");
+}
+
+TEST(NetworkIoBroken, PerMeasurementDatasetsWrongShapeOrValue) {
+  const std::string path = scratch("badextras.h5");
+  Network net = sample_with_extras();
+  net.sensor_sigmas.pop_back();
+  write_network(path, net);
+  EXPECT_CONTAINS(read_error(path), "dataset 'sensor_sigmas' has shape");
+  net = sample_with_extras();
+  net.anchor_nlos[0] = 2;
+  write_network(path, net);
+  EXPECT_CONTAINS(read_error(path), "anchor_nlos row 0: flag 2 is not 0 or 1");
 }
 
 TEST(NetworkIo, RoundTripMinimal3D) {

@@ -326,3 +326,39 @@ TEST(Merge, AverageOfThree) {
   EXPECT_EQ(se, (std::vector<GlobalId>{4, 5}));
   EXPECT_EQ(sr, (std::vector<double>{2.0}));
 }
+
+TEST(Merge, SigmasInverseVarianceAndFlagsOred) {
+  // (1,2) read twice: range 1 with sigma 1, range 2 with sigma 0.5 (weight 4):
+  // weighted mean (1 + 8) / 5 = 1.8, sigma (1 + 4)^(-1/2).
+  std::vector<GlobalId> se = {2, 1, 0, 1, 1, 2};
+  std::vector<double> sr = {1.0, 7.0, 2.0};
+  std::vector<double> ss = {1.0, 0.3, 0.5};
+  std::vector<std::uint8_t> sf = {0, 0, 1};
+  std::vector<GlobalId> ae = {0, 0, 0, 0};
+  std::vector<double> ar = {3.0, 5.0};
+  std::vector<double> as;  // absent: plain mean
+  std::vector<std::uint8_t> af = {1, 0};
+  const MergeStats st = merge_duplicates(se, sr, {&ss, &sf}, ae, ar, {&as, &af});
+  EXPECT_EQ(st.merged_sensor_pairs, 1);
+  EXPECT_EQ(st.merged_anchor_pairs, 1);
+  EXPECT_EQ(se, (std::vector<GlobalId>{0, 1, 1, 2}));
+  ASSERT_EQ(sr.size(), 2u);
+  EXPECT_EQ(sr[0], 7.0);
+  EXPECT_NEAR(sr[1], 1.8, 1e-15);
+  ASSERT_EQ(ss.size(), 2u);
+  EXPECT_EQ(ss[0], 0.3);
+  EXPECT_NEAR(ss[1], 1.0 / std::sqrt(5.0), 1e-15);
+  EXPECT_EQ(sf, (std::vector<std::uint8_t>{0, 1}));
+  EXPECT_EQ(ar, (std::vector<double>{4.0}));
+  EXPECT_TRUE(as.empty());
+  EXPECT_EQ(af, (std::vector<std::uint8_t>{1}));
+}
+
+TEST(Merge, ExtrasOfWrongLengthRefused) {
+  std::vector<GlobalId> se = {0, 1, 1, 0};
+  std::vector<double> sr = {1.0, 2.0};
+  std::vector<double> ss = {1.0};
+  std::vector<GlobalId> ae;
+  std::vector<double> ar;
+  EXPECT_THROW(merge_duplicates(se, sr, {&ss, nullptr}, ae, ar, {}), Error);
+}

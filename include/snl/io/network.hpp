@@ -34,6 +34,12 @@ struct Network {
   std::vector<double> truth;             ///< [rows * p] truth rows [truth_offset, ...)
   std::optional<double> sigma;           ///< noise standard deviation, when known
   std::vector<std::uint8_t> localizability;  ///< optional flags rows [truth_offset, ...) or empty
+  // Optional per-measurement data (format version 1; older readers ignore them).
+  // Each is empty when absent, else one value per row of its edge slab.
+  std::vector<double> sensor_sigmas;      ///< [E_local] noise std of each sensor range (> 0)
+  std::vector<double> anchor_sigmas;      ///< [Ea_local] noise std of each anchor range (> 0)
+  std::vector<std::uint8_t> sensor_nlos;  ///< [E_local] 1 where the range is a non-line-of-sight outlier
+  std::vector<std::uint8_t> anchor_nlos;  ///< [Ea_local] the same for anchor ranges
 
   // Slab bookkeeping (all zero / equal to the local sizes for a whole network).
   GlobalId sensor_edge_offset = 0;  ///< global row of sensor_edges[0]
@@ -82,6 +88,21 @@ struct MergeStats {
 MergeStats merge_duplicates(std::vector<GlobalId>& sensor_edges, std::vector<double>& sensor_ranges,
                             std::vector<GlobalId>& anchor_edges, std::vector<double>& anchor_ranges);
 
+/// Per-row data that travels with the measurements through merge_duplicates.
+/// Each vector is empty (absent) or has one value per row.
+struct MeasurementExtras {
+  std::vector<double>* sigmas = nullptr;       ///< merged by inverse-variance weighting
+  std::vector<std::uint8_t>* nlos = nullptr;   ///< merged by logical or
+};
+
+/// merge_duplicates carrying per-row sigmas and NLOS flags. With sigmas, the
+/// duplicates of a pair merge into the inverse-variance weighted mean of their
+/// ranges, with sigma = (sum 1/sigma_k^2)^(-1/2) (the ML estimate of one range
+/// from independent Gaussian readings); without, into the plain mean as above.
+MergeStats merge_duplicates(std::vector<GlobalId>& sensor_edges, std::vector<double>& sensor_ranges,
+                            MeasurementExtras sensor_extras, std::vector<GlobalId>& anchor_edges,
+                            std::vector<double>& anchor_ranges, MeasurementExtras anchor_extras);
+
 /// Header of a network file: what is needed before reading the data.
 struct NetworkHeader {
   int dim = 0;
@@ -92,6 +113,8 @@ struct NetworkHeader {
   bool has_truth = false;
   std::optional<double> sigma;
   bool has_localizability = false;
+  bool has_sensor_sigmas = false, has_anchor_sigmas = false;
+  bool has_sensor_nlos = false, has_anchor_nlos = false;
 };
 
 /// Collective over comm. Reads the network file: anchors on every rank, and
