@@ -5,21 +5,21 @@
 # Wrong network, wrong options and damaged checkpoints are refused with a
 # clear message.
 source "$(dirname "$0")/common.bash"
-"$SNL" generate -o "$T/net.h5" --sensors 3000 --avg-degree 7 --sigma 0.05 --seed 21 -q
-"$SNL" generate -o "$T/other.h5" --sensors 3000 --avg-degree 7 --sigma 0.05 --seed 22 -q
+"$SNL" generate -o "$T/net.h5" --sensors 1000 --avg-degree 7 --sigma 0.05 --seed 21 -q
+"$SNL" generate -o "$T/other.h5" --sensors 1000 --avg-degree 7 --sigma 0.05 --seed 22 -q
 "$SNL" generate -o "$T/small.h5" --sensors 400 --avg-degree 7 --sigma 0.05 --seed 23 -q
-"$SNL" generate -o "$T/net3.h5" --sensors 3000 --dim 3 --avg-degree 7 --sigma 0.05 --seed 24 -q
+"$SNL" generate -o "$T/net3.h5" --sensors 1000 --dim 3 --avg-degree 7 --sigma 0.05 --seed 24 -q
 # mm3: MM on a 3D network (3D SIMD kernels, 3D edge variables in the checkpoint).
 # pipeline4: four iterations per pass over memory (--temporal-block 4); its
 # signal checkpoints fall on pass ends, and its positions equal pipeline's.
 for case in async pipeline pipeline4 bb mm3 mm; do  # mm last: the refusals below use its checkpoint
   alg=${case%[34]}
-  ARGS=(--max-iter 4000 --tol 0 -q)
+  ARGS=(--max-iter 2000 --tol 0 -q)
   NET="$T/net.h5"
-  EVERY=100
+  EVERY=50
   if [ $case = async ]; then ARGS=(--max-iter 300 --tol 0 -q); NET="$T/small.h5"; EVERY=10; fi
   if [ $case = mm3 ]; then NET="$T/net3.h5"; fi
-  if [ $case = pipeline4 ]; then ARGS+=(--temporal-block 4); EVERY=50; fi
+  if [ $case = pipeline4 ]; then ARGS+=(--temporal-block 4); EVERY=40; fi
   mpi 2 "$SNL" solve "$NET" -o "$T/ref.$case.h5" --algorithm $alg "${ARGS[@]}"
   # Stop a run with SIGUSR1 after it has written some checkpoints.
   rm -f "$T/ck.h5"
@@ -45,7 +45,7 @@ for case in async pipeline pipeline4 bb mm3 mm; do  # mm last: the refusals belo
   done
 done
 h5diff "$T/ref.pipeline.h5" "$T/ref.pipeline4.h5" /positions || fail "--temporal-block 4 changed the positions"
-ARGS=(--max-iter 4000 --tol 0 -q)
+ARGS=(--max-iter 2000 --tol 0 -q)
 # Refusals: another network, other options, damaged files.
 expect_error() {  # expect_error PATTERN cmd...
   local pat=$1; shift
