@@ -7,7 +7,8 @@
 #    replaces the group; --no-covariance leaves the file alone;
 #  - --fim-at estimate on a network without truth: J at the result's positions;
 #  - the edited copy cannot be made: one clear error, non-zero exit, the file untouched;
-#  - no "nan" or "inf" in any text or JSON output.
+#  - no "nan" or "inf" in any text or JSON output;
+#  - tools/plot_result.py draws the ellipses from the group.
 source "$(dirname "$0")/common.bash"
 "$SNL" generate -o "$T/net.h5" --sensors 60 --avg-degree 5 --anchors 8 --sigma 0.02 --seed 3 --localizable no -q
 "$SNL" solve "$T/net.h5" -o "$T/res.h5" --algorithm relaxation --max-iter 30 --tol 0 -q
@@ -111,4 +112,8 @@ cp "$T/orig.h5" "$T/bad.h5" && mkdir "$T/bad.h5.crlb-tmp"
 if "$SNL" eval "$T/net.h5" "$T/bad.h5" --crlb > "$T/bad.out" 2>&1; then fail "eval --crlb with a blocked copy succeeded"; fi
 grep -q "cannot add the CRLB covariances" "$T/bad.out" || fail "no clear error: $(cat "$T/bad.out")"
 cmp -s "$T/orig.h5" "$T/bad.h5" || fail "a failed eval changed the result file"
+# tools/plot_result.py draws the ellipses from the group (and the crosses).
+"$PY" "$(dirname "$0")/../../tools/plot_result.py" "$T/net.h5" "$T/res1.h5" -o "$T/map.png" > "$T/plot.out" \
+  || fail "plot_result.py failed on a result with group crlb: $(cat "$T/plot.out")"
+[ -s "$T/map.png" ] || fail "plot_result.py wrote no figure"
 echo "eval_crlb: ok"
