@@ -103,8 +103,15 @@ void add_eval(CLI::App& app, Commands& c) {
   CLI::App* e = c.eval_cmd = app.add_subcommand("eval", "evaluate a result against a network");
   e->add_option("network", c.eval.network, "network file")->required();
   e->add_option("result", c.eval.result, "result file (or any file with positions)")->required();
-  e->add_flag("--crlb", c.eval.crlb, "also compute the Cramer-Rao lower bound (n <= 20000)");
-  e->add_option("--sigma", c.eval.sigma, "noise standard deviation for --crlb (default: the network's)");
+  e->add_flag("--crlb", c.eval.crlb,
+              "also compute the Cramer-Rao lower bound on the anchored rigid part and add the per-sensor "
+              "covariances to the result file (group crlb)");
+  e->add_option("--sigma", c.eval.sigma,
+                "one noise standard deviation for --crlb (default: the network's, per measurement when present)");
+  e->add_option("--fim-at", c.eval.fim_at, "--crlb: Fisher information at the true positions or at the estimate")
+      ->check(CLI::IsMember({"auto", "truth", "estimate"}))
+      ->capture_default_str();
+  e->add_flag("--no-covariance", c.eval.no_covariance, "--crlb: leave the result file unchanged");
   e->add_option("--json", c.eval.json, "write a JSON summary");
 }
 

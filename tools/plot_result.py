@@ -1,8 +1,14 @@
 #!/usr/bin/python3
 """Plots an snl result: estimated vs true positions, and the convergence history.
 
+When the result file holds per-sensor CRLB covariances (group crlb, written by
+`snl eval --crlb`), the map also draws each covered sensor's 1-sigma ellipse
+(the x-y marginal in 3D) around its true position (around the estimate when
+the network has no truth or the covariances were taken at the estimate), and
+marks the sensors outside the anchored rigid part with a cross.
+
 Uses Debian's /usr/bin/python3 (python3-h5py, python3-numpy, python3-matplotlib).
-  tools/plot_result.py NET.h5 RESULT.h5 -o FIGURE.png
+  tools/plot_result.py NET.h5 RESULT.h5 -o FIGURE.png [--ellipse-scale K] [--no-ellipses]
 """
 import argparse
 
@@ -22,6 +28,8 @@ def main():
     ap.add_argument("result")
     ap.add_argument("-o", "--output", required=True)
     ap.add_argument("--max-points", type=int, default=20000, help="subsample larger networks for the map")
+    ap.add_argument("--ellipse-scale", type=float, default=1.0, help="draw K-sigma ellipses (default 1)")
+    ap.add_argument("--no-ellipses", action="store_true", help="ignore the result's crlb group")
     a = ap.parse_args()
     with h5py.File(a.network, "r") as f:
         anchors = f["anchors"][...]
@@ -32,6 +40,11 @@ def main():
         alg = f.attrs["algorithm"]
         alg = alg.decode() if isinstance(alg, bytes) else str(alg)
         hist = {k: f["history"][k][...] for k in f["history"]} if "history" in f else {}
+        crlb = None
+        if "crlb" in f and not a.no_ellipses:
+            at = f["crlb"].attrs.get("at", "truth")
+            crlb = (f["crlb/covariance"][...], f["crlb/covered"][...].astype(bool),
+                    at.decode() if isinstance(at, bytes) else str(at))
     n, p = x.shape
     fig, axes = plt.subplots(1, 2, figsize=(13, 6))
     ax = axes[0]
@@ -47,6 +60,8 @@ def main():
         ax.scatter(truth[idx, 0], truth[idx, 1], s=14, facecolors="none", edgecolors="k", label="true position", zorder=2)
     ax.scatter(x[idx, 0], x[idx, 1], s=10, color="tab:blue", label="estimate", zorder=3)
     ax.scatter(anchors[:, 0], anchors[:, 1], s=80, marker="s", color="tab:green", label="anchor", zorder=4)
+    if crlb is not None:
+        draw_ellipses(ax, crlb, truth, x, idx, a.ellipse_scale)
     ax.set_aspect("equal")
     title = f"{a.result}: {alg}, n={n}"
     if truth is not None:
@@ -75,6 +90,28 @@ def main():
     fig.tight_layout()
     fig.savefig(a.output, dpi=110)
     print(f"wrote {a.output}")
+
+
+def draw_ellipses(ax, crlb, truth, x, idx, k):
+    """K-sigma ellipses of the x-y block of each covered sensor's covariance."""
+    from matplotlib.collections import EllipseCollection
+    cov, covered, at = crlb
+    centre = truth if (truth is not None and at == "truth") else x
+    sel = idx[covered[idx]]
+    if len(sel):
+        c2 = cov[sel][:, :2, :2]
+        w, v = np.linalg.eigh(c2)  # ascending eigenvalues, columns = axes
+        w = np.maximum(w, 0.0)
+        major, minor = 2 * k * np.sqrt(w[:, 1]), 2 * k * np.sqrt(w[:, 0])
+        angle = np.degrees(np.arctan2(v[:, 1, 1], v[:, 0, 1]))
+        ax.add_collection(EllipseCollection(major, minor, angle, units="xy", offsets=centre[sel][:, :2],
+                                            offset_transform=ax.transData, facecolors="none",
+                                            edgecolors="tab:purple", linewidths=0.8, zorder=5))
+        ax.plot([], [], color="tab:purple", lw=0.8, label=f"CRLB {k:g}-sigma ellipse (at the {at})")
+    out = idx[~covered[idx]]
+    if len(out):
+        ax.scatter(centre[out, 0], centre[out, 1], s=40, marker="x", color="tab:orange", zorder=6,
+                   label=f"outside the rigid part ({int((~covered).sum())})")
 
 
 if __name__ == "__main__":

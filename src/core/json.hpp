@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace snl {
 
@@ -34,6 +35,19 @@ class JsonObject {
     return *this;
   }
   JsonObject& add(const std::string& key, int v) { return add(key, static_cast<std::int64_t>(v)); }
+  /// An array of integers.
+  JsonObject& add(const std::string& key, const std::vector<std::int64_t>& v) {
+    sep();
+    os_ << quote(key) << ": [";
+    for (std::size_t i = 0; i < v.size(); ++i) os_ << (i ? ", " : "") << v[i];
+    os_ << "]";
+    return *this;
+  }
+  JsonObject& add_null(const std::string& key) {
+    sep();
+    os_ << quote(key) << ": null";
+    return *this;
+  }
   JsonObject& add_bool(const std::string& key, bool v) {
     sep();
     os_ << quote(key) << ": " << (v ? "true" : "false");

@@ -6,8 +6,8 @@
 #    per sensor (1/n), and with --crlb the Cramér-Rao bound sqrt(tr(J^-1)/n),
 #    J at the true positions with the network's sigma, and with --sigma;
 #  - the same numbers on 1 and 2 ranks;
-#  - on a network that is not rigid, --crlb reports "not defined" with a
-#    reason (JSON crlb_defined false, crlb_reason, no crlb_rmse), exit 0.
+#  - on a network with a flexible part, --crlb bounds the anchored rigid part
+#    and lists the sensors outside it (text and JSON), exit 0.
 source "$(dirname "$0")/common.bash"
 "$SNL" generate -o "$T/net.h5" --sensors 40 --avg-degree 6 --sigma 0.03 --seed 8 -q
 "$SNL" solve "$T/net.h5" -o "$T/res.h5" --algorithm relaxation --max-iter 40 --tol 0 -q
@@ -82,12 +82,19 @@ with h5py.File(sys.argv[1], "w") as f:
     f.create_dataset("positions", data=t)  # doubles as a result file
 EOF
 "$SNL" eval "$T/flex.h5" "$T/flex.h5" --crlb --json "$T/flex.json" > "$T/flex.out" || fail "eval --crlb on a flexible network failed"
-grep -q "not defined" "$T/flex.out" || fail "eval --crlb printed no 'not defined' for a flexible network: $(cat "$T/flex.out")"
-grep -Eq "Cramer-Rao bound RMSE_CRLB = [0-9]" "$T/flex.out" && fail "eval --crlb printed a number for a flexible network"
+# The bound covers the rigid part (s0: J = u1 u1^T + u2 u2^T over sigma^2) and
+# lists s1 outside it; nothing is printed as nan.
+grep -Eq "Cramer-Rao bound RMSE_CRLB = [0-9.e-]+ over the 1 sensor" "$T/flex.out" || fail "eval --crlb on a flexible network: $(cat "$T/flex.out")"
+grep -q "1 sensor(s) outside it, no finite bound: 1" "$T/flex.out" || fail "eval --crlb did not list the flexible sensor: $(cat "$T/flex.out")"
+grep -qi nan "$T/flex.out" && fail "eval printed nan: $(cat "$T/flex.out")"
 "$PY" -c "
-import json, sys
+import json, sys, numpy as np
 d = json.load(open(sys.argv[1]))
-sys.exit(0 if d['crlb_defined'] is False and 'rigid' in d['crlb_reason'] and 'crlb_rmse' not in d else 1)" \
+A = np.array([[0., 0.], [1., 0.]]); t = np.array([0.3, 2.])
+J = sum(np.outer(u, u) for u in [(t - a) / np.linalg.norm(t - a) for a in A]) / 0.01 ** 2
+want = np.sqrt(np.trace(np.linalg.inv(J)))
+ok = d['crlb_defined'] is True and d['crlb_sensors'] == 1 and d['crlb_outside'] == [1] and abs(d['crlb_rmse'] - want) <= 1e-12 * want
+sys.exit(0 if ok else 1)" \
   "$T/flex.json" || fail "eval --crlb JSON on a flexible network: $(cat "$T/flex.json")"
 # RMSE/MPE over the localizable sensors: s3 has a single measurement (fewer
 # than p+1), so it is left out; s0..s2 each measure three anchors.

@@ -279,13 +279,16 @@ TEST(CrlbExact, TwoSensorsOnALine) {
     ASSERT_TRUE(c.defined) << c.reason;
     EXPECT_NEAR(c.rmse, std::sqrt(2.5) * s, 1e-14 * s) << s;
   }
-  // Without s1's anchor, s1 can turn about s0: J is singular, reported not printed.
+  // Without s1's anchor, s1 can turn about s0: the bound covers s0 alone
+  // (J_00 = I / s^2, trace 2 s^2) and lists s1 outside.
   Rows f = r;
   f.ae = {0, 0, 0, 1};
   f.ar = {1, 1};
   const auto c = cramer_rao_bound(f.done(), 0.01);
-  EXPECT_FALSE(c.defined);
-  EXPECT_FALSE(c.reason.empty());
+  ASSERT_TRUE(c.defined) << c.reason;
+  EXPECT_EQ(c.covered, 1);
+  EXPECT_EQ(c.outside, (std::vector<GlobalId>{1}));
+  EXPECT_NEAR(c.rmse, std::sqrt(2.0) * 0.01, 1e-15);
 }
 
 TEST(CrlbExact, RandomNetworkMatchesDenseInverse) {

@@ -59,8 +59,12 @@ struct EvalCommand {
   std::string network;
   std::string result;
   bool crlb = false;
-  double sigma = -1;  ///< < 0: the network's sigma
+  double sigma = -1;  ///< < 0: the network's sigmas (per measurement when present)
   std::string json;
+  /// Where the Fisher information is evaluated: "truth", "estimate", or "auto"
+  /// (the true positions when the network has them, else the estimate).
+  std::string fim_at = "auto";
+  bool no_covariance = false;  ///< do not add the per-sensor covariances to the result file
 };
 void run_eval(const EvalCommand& cmd, MPI_Comm comm);
 

@@ -2,6 +2,7 @@
 // The result file (format "snl-result", version 1) and --init position files.
 #include <mpi.h>
 
+#include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
@@ -38,5 +39,24 @@ ResultFile read_result_serial(const std::string& path);
 /// every value is finite; throws snl::Error (same on all ranks) otherwise.
 std::vector<double> read_positions(const std::string& path, MPI_Comm comm, GlobalId expected_n,
                                    int expected_dim, GlobalId row_offset, GlobalId rows);
+
+/// Per-sensor uncertainty stored in a result file (group "crlb", optional;
+/// docs/formats.md).
+struct ResultCovariance {
+  int dim = 2;
+  GlobalId num_sensors = 0;
+  std::vector<double> covariance;      ///< [n * p * p] p x p blocks of J^-1; 0 outside the covered part
+  std::vector<std::uint8_t> covered;   ///< [n] 1 where the bound covers the sensor
+  std::string at;                      ///< where J was evaluated: "truth" or "estimate"
+  std::string sigma_model;             ///< "uniform" or "per-measurement"
+  double sigma = 0;                    ///< the uniform sigma (0 for per-measurement)
+  double rmse = 0;                     ///< sqrt(tr(J^-1) / covered)
+};
+
+/// Serial (one process). Adds (or replaces) group "crlb" of the result file
+/// `path`, keeping everything else: a copy next to it is edited and renamed
+/// over `path` only when complete; on any error the original is untouched and
+/// the copy removed. Throws snl::Error.
+void add_covariance_to_result(const std::string& path, const ResultCovariance& c);
 
 }  // namespace snl
