@@ -70,6 +70,7 @@ TEST(TextTable, BadEdgeRowsNameTheirLine) {
   EXPECT_EQ(edge_error("0,1,0.5\n0,x,0.5\n"), "e.csv:2: column 2 (sensor): 'x' is not an integer index");
   EXPECT_EQ(edge_error("0,1,0.5\n0,1.0,0.5\n"), "e.csv:2: column 2 (sensor): '1.0' is not an integer index");
   EXPECT_EQ(edge_error("0,1,0.5\n0,,0.5\n"), "e.csv:2: column 2 (sensor) is empty");
+  EXPECT_EQ(edge_error("0,1,\n"), "e.csv:1: column 3 (range) is empty");
   EXPECT_EQ(edge_error("0,1,abc\n"), "e.csv:1: column 3 (range): 'abc' is not a number");
   EXPECT_EQ(edge_error("0,1,0.5x\n"), "e.csv:1: column 3 (range): '0.5x' is not a number");
   EXPECT_EQ(edge_error("0,1,0.5\n0 1 -0.5\n"), "e.csv:2: range -0.5 is negative");
@@ -168,6 +169,11 @@ TEST(TextTable, ImportCarriesSigmasOfEachFile) {
   EXPECT_TRUE(net.sensor_sigmas.empty());
   EXPECT_EQ(net.anchor_sigmas, (std::vector<double>{0.5, 0.25}));
   EXPECT_TRUE(snl::check_network(net, true).ok());
+  in.sensor_edges.text = "0,1,0.5,0.125\n1,2,0.5,0.0625\n";
+  in.anchor_edges.text = "0 0 0.1\n2 1 0.2\n";
+  const snl::Network net2 = import_network(in, {});
+  EXPECT_EQ(net2.sensor_sigmas, (std::vector<double>{0.125, 0.0625}));
+  EXPECT_TRUE(net2.anchor_sigmas.empty());
 }
 
 TEST(TextTable, ImportChecksIdsAndShapesAtTheirLines) {
