@@ -23,8 +23,9 @@ std::string_view trim(std::string_view s) {
   return s;
 }
 
-std::vector<std::string_view> split_fields(std::string_view line) {
-  std::vector<std::string_view> out;
+// Fields of one line into `out` (reused from line to line: no allocation per row).
+void split_fields(std::string_view line, std::vector<std::string_view>& out) {
+  out.clear();
   if (line.find(',') != std::string_view::npos) {
     for (;;) {
       const auto c = line.find(',');
@@ -32,7 +33,7 @@ std::vector<std::string_view> split_fields(std::string_view line) {
       if (c == std::string_view::npos) break;
       line.remove_prefix(c + 1);
     }
-    return out;
+    return;
   }
   std::size_t k = 0;
   while (k < line.size()) {
@@ -41,10 +42,8 @@ std::vector<std::string_view> split_fields(std::string_view line) {
     while (k < line.size() && !is_blank(line[k])) ++k;
     if (k > b) out.push_back(line.substr(b, k - b));
   }
-  return out;
 }
 
-// Whole-field parses (a leading '+' allowed); false if anything is left over.
 bool parse_double(std::string_view f, double& v) {
   if (!f.empty() && f.front() == '+') f.remove_prefix(1);
   if (f.empty() || f.front() == '+') return false;
@@ -84,19 +83,25 @@ std::string quoted(std::string_view f) {
   return "'" + std::string(f.substr(0, kMax)) + (f.size() > kMax ? "...'" : "'");
 }
 
-// Every row has `cols` columns, one of `allowed`; the first row decides.
-int check_columns(const std::vector<TextRow>& rows, const std::string& name, int lo, int hi, const char* layout,
-                  const char* why_same) {
-  if (rows.empty()) return 0;
-  const int cols = static_cast<int>(rows.front().fields.size());
-  for (const TextRow& r : rows) {
+// Every row has as many columns as the first, between lo and hi.
+struct ColumnRule {
+  const std::string& name;
+  int lo, hi;
+  const char* layout;    // what the columns are, for the message
+  const char* why_same;  // why every row needs the same count
+  int cols = 0;          // of the first row (0: no row yet)
+  std::int64_t first_line = 0;
+  void check(const TextRow& r) {
     const int c = static_cast<int>(r.fields.size());
     if (c < lo || c > hi) fail(name, r.line, s(c) + " columns, expected " + layout);
-    if (c != cols)
-      fail(name, r.line, s(c) + " columns, but line " + s(rows.front().line) + " has " + s(cols) + ": " + why_same);
+    if (cols == 0) {
+      cols = c;
+      first_line = r.line;
+    } else if (c != cols) {
+      fail(name, r.line, s(c) + " columns, but line " + s(first_line) + " has " + s(cols) + ": " + why_same);
+    }
   }
-  return cols;
-}
+};
 
 double field_number(const TextRow& r, int col, const char* what, const std::string& name) {
   const std::string_view f = r.fields[col];
@@ -119,52 +124,54 @@ GlobalId field_id(const TextRow& r, int col, const char* what, const std::string
   return v - base;
 }
 
-}  // namespace
-
-std::vector<TextRow> split_rows(std::string_view text) {
-  std::vector<TextRow> rows;
-  std::int64_t line = 0;
+// Calls f(row) for each data row of `text` (the rules of split_rows); the
+// row's field vector is reused, so a large file costs no allocation per row.
+template <class F>
+void for_each_row(std::string_view text, F&& f) {
+  TextRow r;
   bool first = true;
   while (!text.empty()) {
     const auto nl = text.find('\n');
     std::string_view l = text.substr(0, nl);
     text.remove_prefix(nl == std::string_view::npos ? text.size() : nl + 1);
-    ++line;
+    ++r.line;
     if (const auto h = l.find('#'); h != std::string_view::npos) l = l.substr(0, h);
     l = trim(l);
     if (l.empty()) continue;
-    TextRow r{line, split_fields(l)};
+    split_fields(l, r.fields);
     // A header: the first data line, without a single number (so that a typo
     // in the first row is reported, not skipped as a header).
-    const bool header = first && std::none_of(r.fields.begin(), r.fields.end(), [](std::string_view f) {
-                          double v = 0;
-                          return parse_double(f, v);
+    const bool header = first && std::none_of(r.fields.begin(), r.fields.end(), [](std::string_view v) {
+                          double d = 0;
+                          return parse_double(v, d);
                         });
     first = false;
-    if (header) continue;
-    rows.push_back(std::move(r));
+    if (!header) f(static_cast<const TextRow&>(r));
   }
+}
+
+}  // namespace
+
+std::vector<TextRow> split_rows(std::string_view text) {
+  std::vector<TextRow> rows;
+  for_each_row(text, [&](const TextRow& r) { rows.push_back(r); });
   return rows;
 }
 
 EdgeTable parse_edges(std::string_view text, const std::string& name, EdgeKind kind, int index_base) {
   const bool sensor = kind == EdgeKind::kSensor;
   const char* layout = sensor ? "3 or 4 (i, j, range[, sigma])" : "3 or 4 (i, anchor, range[, sigma])";
-  const std::vector<TextRow> rows = split_rows(text);
-  const int cols = check_columns(rows, name, 3, 4, layout, "a sigma column must be on every row or on none");
+  ColumnRule rule{name, 3, 4, layout, "a sigma column must be on every row or on none"};
   EdgeTable t;
-  t.edges.reserve(2 * rows.size());
-  t.ranges.reserve(rows.size());
-  t.lines.reserve(rows.size());
-  if (cols == 4) t.sigmas.reserve(rows.size());
-  for (const TextRow& r : rows) {
+  for_each_row(text, [&](const TextRow& r) {
+    rule.check(r);
     const GlobalId i = field_id(r, 0, "sensor", name, index_base);
     const GlobalId j = field_id(r, 1, sensor ? "sensor" : "anchor", name, index_base);
     if (sensor && i == j) fail(name, r.line, "self-loop (" + s(i + index_base) + ", " + s(j + index_base) + ")");
     const double d = field_number(r, 2, "range", name);
     if (!std::isfinite(d)) fail(name, r.line, "range is " + num(d));
     if (d < 0) fail(name, r.line, "range " + num(d) + " is negative");
-    if (cols == 4) {
+    if (rule.cols == 4) {
       const double sg = field_number(r, 3, "sigma", name);
       if (!(sg >= kMinSigma && sg <= kMaxSigma))
         fail(name, r.line, "sigma " + num(sg) + " is outside [1e-150, 1e150] (weights 1/sigma^2 must be finite and positive)");
@@ -174,26 +181,25 @@ EdgeTable parse_edges(std::string_view text, const std::string& name, EdgeKind k
     t.edges.push_back(j);
     t.ranges.push_back(d);
     t.lines.push_back(r.line);
-  }
+  });
   return t;
 }
 
 PointTable parse_points(std::string_view text, const std::string& name) {
-  const std::vector<TextRow> rows = split_rows(text);
+  ColumnRule rule{name, 2, 3, "2 or 3 coordinates (the dimension p)",
+                  "every row must have the same number of coordinates (the dimension p)"};
   PointTable t;
-  t.dim = check_columns(rows, name, 2, 3, "2 or 3 coordinates (the dimension p)",
-                        "every row must have the same number of coordinates (the dimension p)");
-  t.coords.reserve(rows.size() * static_cast<std::size_t>(t.dim));
-  t.lines.reserve(rows.size());
   static const char* const kAxis[] = {"x", "y", "z"};
-  for (const TextRow& r : rows) {
-    for (int c = 0; c < t.dim; ++c) {
+  for_each_row(text, [&](const TextRow& r) {
+    rule.check(r);
+    for (int c = 0; c < rule.cols; ++c) {
       const double v = field_number(r, c, kAxis[c], name);
       if (!std::isfinite(v)) fail(name, r.line, "coordinate " + std::string(kAxis[c]) + " is " + num(v));
       t.coords.push_back(v);
     }
     t.lines.push_back(r.line);
-  }
+  });
+  t.dim = rule.cols;
   return t;
 }
 
