@@ -35,8 +35,10 @@ struct Commands {
   snl::SolveCommand solve;
   snl::EvalCommand eval;
   snl::ExperimentCommand experiment;
+  snl::ImportCommand import;
+  snl::ExportCommand export_;
   CLI::App *generate = nullptr, *info_cmd = nullptr, *solve_cmd = nullptr, *eval_cmd = nullptr,
-           *experiment_cmd = nullptr;
+           *experiment_cmd = nullptr, *import_cmd = nullptr, *export_cmd = nullptr;
 };
 
 void add_generate(CLI::App& app, Commands& c) {
@@ -140,6 +142,33 @@ void add_experiment(CLI::App& app, Commands& c) {
   x->add_flag("-q,--quiet", c.experiment.quiet, "no progress output");
 }
 
+void add_import(CLI::App& app, Commands& c) {
+  CLI::App* m = c.import_cmd = app.add_subcommand(
+      "import", "network file from text tables (CSV or whitespace-separated; docs/formats.md, Text files)");
+  m->add_option("--sensor-edges", c.import.sensor_edges, "rows i,j,range[,sigma]")->required();
+  m->add_option("--anchor-edges", c.import.anchor_edges, "rows i,anchor,range[,sigma]")->required();
+  m->add_option("--anchors", c.import.anchors, "one anchor position per row (p = 2 or 3 columns)")->required();
+  m->add_option("--truth", c.import.truth, "one true position per sensor (optional)");
+  m->add_option("-o,--output", c.import.output, "output network file")->required();
+  m->add_option("--sensors", c.import.sensors, "number of sensors n (default: truth rows, else largest id + 1)");
+  m->add_option("--index-base", c.import.index_base, "first sensor and anchor id in the files: 0 or 1")
+      ->check(CLI::IsMember({0, 1}))
+      ->capture_default_str();
+  m->add_option("--sigma", c.import.sigma, "record the network's noise standard deviation (for eval --crlb)");
+  m->add_flag("-q,--quiet", c.import.quiet, "print nothing on success");
+}
+
+void add_export(CLI::App& app, Commands& c) {
+  CLI::App* x = c.export_cmd = app.add_subcommand("export", "positions of a result as CSV (sensor,x,y[,z])");
+  x->add_option("result", c.export_.result, "result file")->required();
+  x->add_option("-o,--output", c.export_.output, "output CSV file")->required();
+  x->add_option("--network", c.export_.network, "add each sensor's localizability flags (columns flags,localizable)");
+  x->add_option("--index-base", c.export_.index_base, "first sensor id written: 0 or 1")
+      ->check(CLI::IsMember({0, 1}))
+      ->capture_default_str();
+  x->add_flag("-q,--quiet", c.export_.quiet, "print nothing on success");
+}
+
 // --anchors and --localizable of snl generate, into its options.
 void parse_generate_choices(Commands& c) {
   auto& opt = c.gen.options;
@@ -178,6 +207,10 @@ int run_command(Commands& c, MPI_Comm comm) {
     snl::run_eval(c.eval, comm);
   } else if (*c.experiment_cmd) {
     snl::run_experiment(c.experiment, comm);
+  } else if (*c.import_cmd) {
+    snl::run_import(c.import, comm);
+  } else if (*c.export_cmd) {
+    snl::run_export(c.export_, comm);
   }
   return 0;
 }
@@ -242,6 +275,8 @@ int main(int argc, char** argv) {
   add_solve(app, c);
   add_eval(app, c);
   add_experiment(app, c);
+  add_import(app, c);
+  add_export(app, c);
 
   // `snl consensus generate|solve ...` (seed 001) parse their own options.
   app.add_subcommand("consensus", "consensus optimisation (seed 001): snl consensus generate|solve --help")

@@ -91,6 +91,30 @@ struct ExperimentCommand {
 /// Monte Carlo study over noise draws (issue: experiment driver). Collective.
 void run_experiment(const ExperimentCommand& cmd, MPI_Comm comm);
 
+struct ImportCommand {
+  std::string sensor_edges;  ///< rows i,j,range[,sigma]
+  std::string anchor_edges;  ///< rows i,anchor,range[,sigma]
+  std::string anchors;       ///< one anchor position per row (p columns)
+  std::string truth;         ///< optional: one true position per sensor
+  std::string output;        ///< network file
+  std::int64_t sensors = 0;  ///< n (0: truth rows, else largest sensor id + 1)
+  int index_base = 0;        ///< ids in the files start at 0 or 1
+  double sigma = -1;         ///< network noise standard deviation (< 0: unknown)
+  bool quiet = false;
+};
+/// A network file from text tables (docs/formats.md, "Text files"). Collective.
+void run_import(const ImportCommand& cmd, MPI_Comm comm);
+
+struct ExportCommand {
+  std::string result;   ///< result file (or any file with positions and the result attributes)
+  std::string output;   ///< CSV
+  std::string network;  ///< optional: adds each sensor's localizability flags
+  int index_base = 0;   ///< first sensor id written
+  bool quiet = false;
+};
+/// A result's positions as CSV. Collective.
+void run_export(const ExportCommand& cmd, MPI_Comm comm);
+
 /// Checks on rank 0 that `path` can be created (its directory exists and is
 /// writable); every rank throws the same error otherwise.
 void check_output_path(const std::string& path, MPI_Comm comm);
