@@ -37,8 +37,10 @@ class ProgressPrinter : public IterationCallback {
     last_ = s.elapsed;
     const double per_it = s.iteration > 0 ? (s.elapsed - phase_start_) / s.iteration : 0;
     const double eta = per_it * (max_iter_ - s.iteration) + (phases_ - phase_index_) * per_it * max_iter_;
-    std::fprintf(stderr, "%-10s %10lld %14.8g %14.8g %11.3e %11.4g %8.1fs %8.0fs\n", s.phase.c_str(),
-                 static_cast<long long>(s.iteration), s.cost, s.ml_cost, s.rel_change, s.rmse, s.elapsed, eta);
+    char rmse[32] = "n/a";  // no truth
+    if (std::isfinite(s.rmse)) std::snprintf(rmse, sizeof rmse, "%.4g", s.rmse);
+    std::fprintf(stderr, "%-10s %10lld %14.8g %14.8g %11.3e %11s %8.1fs %8.0fs\n", s.phase.c_str(),
+                 static_cast<long long>(s.iteration), s.cost, s.ml_cost, s.rel_change, rmse, s.elapsed, eta);
     return CallbackReturn::kContinue;
   }
 
@@ -307,6 +309,8 @@ std::string json_summary(const SolveCommand& cmd, const LoadedProblem& lp, const
   if (s.errors.valid) {
     j.add("rmse", s.errors.rmse).add("mpe", s.errors.mpe);
     j.add("rmse_localizable", s.errors.rmse_localizable).add("mpe_localizable", s.errors.mpe_localizable);
+    if (!std::isfinite(s.errors.rmse_localizable))  // null above: over an empty set
+      j.add("localizable_metrics_reason", "no sensor can be localized");
   }
   return j.str();
 }
