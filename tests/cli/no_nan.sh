@@ -5,6 +5,7 @@
 # a degenerate one with truth (no sensor can be localized: no anchor
 # measurement at all) and on the same without truth (and without sigma).
 # Metrics over an empty set must be reported absent (n/a, null), not NaN.
+# Also: solve's early warning and its iteration-cap message, generate's warning.
 source "$(dirname "$0")/common.bash"
 O="$T/out"; mkdir -p "$O"
 run() {  # run NAME CMD...: stdout and stderr of CMD into $O/NAME.{out,err}; any exit status
@@ -44,6 +45,14 @@ for m in newton-tree newton-path subgradient incremental central; do
     --progress-seconds 0 --json "$O/csolve_$m.json"
 done
 ls "$O"/*.json > /dev/null || fail "no JSON output was written"
+# The same runs say early when they cannot succeed, with the numbers and the remedy.
+grep -q "warning: most sensors (30 of 30) cannot be localized.*--avg-degree" "$O/solve_bad_pipeline.err" \
+  || fail "solve on a network with no localizable sensor did not warn before iterating"
+grep -q "the mm phase stopped at --max-iter 30 with relative change .* times --tol 1e-06.*raise --max-iter" \
+  "$O/solve_good_pipeline.err" || fail "solve stopped by --max-iter did not say how far from --tol"
+! grep -q "most sensors" "$O/solve_good_pipeline.err" || fail "solve warned on a localizable network"
+grep -q "warning: .*30 of 30 sensors (100%) cannot be localized" "$O/gen_bad.err" \
+  || fail "generate wrote a non-localizable network without a warning"
 # Every output file, as a person or a program reads it.
 bad=$(grep -ilwE 'nan|inf|infinity' "$O"/* || true)
 if [ -n "$bad" ]; then
