@@ -30,7 +30,7 @@ std::string honoured_by(bool Info::*capability) { return "only " + snl::algorith
 // The subcommands' settings, filled by the parser.
 struct Commands {
   snl::GenerateCommand gen;
-  std::string anchors = "corners", localizable = "auto";  // parsed into gen.options by parse_generate_choices
+  std::string anchors = "auto", localizable = "auto";  // parsed into gen.options by parse_generate_choices
   snl::InfoCommand info;
   snl::SolveCommand solve;
   snl::EvalCommand eval;
@@ -46,9 +46,16 @@ void add_generate(CLI::App& app, Commands& c) {
   g->add_option("-o,--output", c.gen.output, "output network file")->required();
   g->add_option("--sensors", c.gen.options.sensors, "number of sensors n")->required();
   g->add_option("--dim", c.gen.options.dim, "dimension p (2 or 3)")->capture_default_str();
-  g->add_option("--avg-degree", c.gen.options.avg_degree, "average sensor-sensor degree")->capture_default_str();
-  g->add_option("--sigma", c.gen.options.sigma, "range noise standard deviation (003 eq. 28)")->capture_default_str();
-  g->add_option("--anchors", c.anchors, "'corners' or a number K of random anchors")->capture_default_str();
+  g->add_option("--avg-degree", c.gen.options.avg_degree,
+                "average sensor-sensor degree (default: 16 in 2D, 24 in 3D, docs/generator.md)");
+  CLI::Option* sigma =
+      g->add_option("--sigma", c.gen.options.sigma, "range noise standard deviation (003 eq. 28)")->capture_default_str();
+  g->add_option("--sigma-rel", c.gen.options.sigma_rel, "noise standard deviation relative to the link radius")
+      ->excludes(sigma);
+  g->add_option("--side", c.gen.options.side,
+                "side of the region (default: 1 up to 1000 sensors, then growing at constant density)");
+  g->add_option("--anchors", c.anchors, "'auto' (corners + 1% random), 'corners' or a number K of random anchors")
+      ->capture_default_str();
   g->add_option("--anchor-radius", c.gen.options.anchor_radius, "anchor link radius (default: sensor radius)");
   g->add_option("--seed", c.gen.options.seed, "random seed")->capture_default_str();
   g->add_option("--localizable", c.localizable, "auto|yes|no: redraw until localizable (auto: n <= 20000)")
@@ -172,7 +179,9 @@ void add_export(CLI::App& app, Commands& c) {
 // --anchors and --localizable of snl generate, into its options.
 void parse_generate_choices(Commands& c) {
   auto& opt = c.gen.options;
-  if (c.anchors == "corners") {
+  if (c.anchors == "auto") {
+    opt.num_random_anchors = snl::kAutoAnchors;
+  } else if (c.anchors == "corners") {
     opt.num_random_anchors = 0;
   } else {
     try {
@@ -180,7 +189,7 @@ void parse_generate_choices(Commands& c) {
       opt.num_random_anchors = std::stoi(c.anchors, &pos);
       if (pos != c.anchors.size() || opt.num_random_anchors < 1) throw std::invalid_argument("");
     } catch (const std::exception&) {
-      throw snl::Error("--anchors must be 'corners' or a positive number, not '" + c.anchors + "'");
+      throw snl::Error("--anchors must be 'auto', 'corners' or a positive number, not '" + c.anchors + "'");
     }
   }
   if (c.localizable == "auto")

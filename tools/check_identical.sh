@@ -70,7 +70,7 @@ EOF
 }
 
 echo "== generate"
-run_both gen2d 0 generate -o @D@/net2d.h5 --sensors 300 --avg-degree 8 --sigma 0.02 --seed 5 -q
+run_both gen2d 0 generate -o @D@/net2d.h5 --sensors 300 --avg-degree 8 --sigma 0.02 --anchors corners --seed 5 -q
 run_both gen3d 0 generate -o @D@/net3d.h5 --sensors 200 --dim 3 --avg-degree 10 --sigma 0.02 --anchors 8 --seed 6 -q
 cmp_h5 net2d.h5; cmp_h5 net3d.h5
 cp "$W/old/net2d.h5" "$W/net2d.h5"; cp "$W/old/net3d.h5" "$W/net3d.h5"

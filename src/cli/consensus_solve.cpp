@@ -31,9 +31,11 @@ class Progress {
     }
     if (r.elapsed - last_ < period_ && r.iteration != max_iter_ && r.iteration != 0) return;
     last_ = r.elapsed;
-    std::fprintf(stderr, "%10lld %10lld %16.10g %12.4e %12.4e %12.6g %8.1fs\n", static_cast<long long>(r.iteration),
-                 static_cast<long long>(r.dual_iterations), r.objective, r.max_abs_error, r.decrement, r.messages,
-                 r.elapsed);
+    // The baselines have no Newton decrement: n/a rather than nan.
+    char dec[32] = "n/a";
+    if (std::isfinite(r.decrement)) std::snprintf(dec, sizeof dec, "%.4e", r.decrement);
+    std::fprintf(stderr, "%10lld %10lld %16.10g %12.4e %12s %12.6g %8.1fs\n", static_cast<long long>(r.iteration),
+                 static_cast<long long>(r.dual_iterations), r.objective, r.max_abs_error, dec, r.messages, r.elapsed);
   }
 
  private:

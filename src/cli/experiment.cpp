@@ -223,7 +223,7 @@ void print_aggregates(const Aggregates& agg) {
   for (const auto& [k, a] : agg) {
     std::string reach;
     if (a.reach_trials > 0)
-      reach = csv_num(a.reach_count ? a.reach_reals / a.reach_count : NAN) + " (reached in " +
+      reach = (a.reach_count ? csv_num(a.reach_reals / a.reach_count) : std::string("n/a")) + " (reached in " +
               std::to_string(a.reach_count) + "/" + std::to_string(a.reach_trials) + " trials)";
     std::printf("%-7g %-11s %7d %11.5g %11.5g %13.6g %13.6g %8d %s\n", k.first, k.second.c_str(), a.count,
                 a.mpe / a.count, std::sqrt(a.rmse2 / a.count), a.ml / a.count, a.reals / a.count, a.worse,

@@ -1,5 +1,8 @@
 // snl info: summary and validation of a network file (on rank 0).
+#include <algorithm>
+#include <cmath>
 #include <sstream>
+#include <vector>
 
 #include "cli/cli_util.hpp"
 #include "core/json.hpp"
@@ -11,6 +14,32 @@ namespace snl {
 
 using detail::fmt;
 using detail::is_root;
+
+namespace {
+
+// Median of the measured sensor-sensor ranges (anchor ranges if there are none);
+// NaN when the network has no range at all.
+double median_range(const Network& net) {
+  std::vector<double> r = net.sensor_ranges.empty() ? net.anchor_ranges : net.sensor_ranges;
+  if (r.empty()) return std::nan("");
+  const auto mid = r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2);
+  std::nth_element(r.begin(), mid, r.end());
+  return *mid;
+}
+
+// "sigma S, median range R: sigma / median range Q", with n/a and the reason for what is missing.
+std::string noise_regime(const Network& net, double med) {
+  std::ostringstream os;
+  os << "sigma " << (net.sigma ? fmt(*net.sigma) : std::string("unknown")) << ", median range "
+     << (std::isfinite(med) ? fmt(med, 4) : std::string("n/a (no ranges)")) << ", sigma / median range ";
+  if (net.sigma && std::isfinite(med) && med > 0)
+    os << fmt(*net.sigma / med, 3);
+  else
+    os << "n/a (" << (!net.sigma ? "sigma unknown" : "no positive range") << ")";
+  return os.str();
+}
+
+}  // namespace
 
 void run_info(const InfoCommand& cmd, MPI_Comm comm) {
   std::string text, json;
@@ -24,6 +53,9 @@ void run_info(const InfoCommand& cmd, MPI_Comm comm) {
     const DegreeStats ds = degree_stats(net);
     const bool rig = net.has_truth && net.num_sensors <= kRigidityLimit;
     const LocalizabilityReport lr = analyze_localizability(net, rig);
+    const double med = median_range(net);
+    const double nan = std::nan("");
+    const double sigma = net.sigma ? *net.sigma : nan;
     std::ostringstream os;
     os << cmd.network << ": valid snl-network v1\n"
        << "  sensors n = " << net.num_sensors << ", anchors m = " << net.num_anchors() << ", dimension p = " << net.dim
@@ -33,8 +65,7 @@ void run_info(const InfoCommand& cmd, MPI_Comm comm) {
        << " merged)\n"
        << "  sensor degree: mean " << fmt(ds.mean, 4) << ", min " << ds.min << ", max " << ds.max
        << "; anchor measurements per sensor: mean " << fmt(ds.mean_anchor, 4) << ", max " << ds.max_anchor << "\n"
-       << "  truth: " << (net.has_truth ? "present" : "absent")
-       << ", sigma: " << (net.sigma ? fmt(*net.sigma) : std::string("unknown")) << "\n"
+       << "  truth: " << (net.has_truth ? "present" : "absent") << "; " << noise_regime(net, med) << "\n"
        << "  " << lr.summary();
     if (!rig) os << "\n  (rigidity not checked: " << (net.has_truth ? "n > 20000" : "no truth positions") << ")";
     if (net.num_anchors() == 0) os << "\n  warning: no anchors; snl solve needs at least one";
@@ -58,7 +89,10 @@ void run_info(const InfoCommand& cmd, MPI_Comm comm) {
         .add_bool("rigidity_checked", lr.rigidity_checked)
         .add_bool("rigid", lr.rigid)
         .add_bool("localizable", lr.localizable())
-        .add_bool("has_truth", net.has_truth);
+        .add_bool("has_truth", net.has_truth)
+        .add("sigma", sigma)  // null when unknown
+        .add("median_range", med)
+        .add("sigma_over_median_range", std::isfinite(sigma) && med > 0 ? sigma / med : nan);
     json = j.str();
     if (!cmd.json.empty()) write_text_atomic(cmd.json, json);
   });

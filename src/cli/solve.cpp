@@ -37,8 +37,10 @@ class ProgressPrinter : public IterationCallback {
     last_ = s.elapsed;
     const double per_it = s.iteration > 0 ? (s.elapsed - phase_start_) / s.iteration : 0;
     const double eta = per_it * (max_iter_ - s.iteration) + (phases_ - phase_index_) * per_it * max_iter_;
-    std::fprintf(stderr, "%-10s %10lld %14.8g %14.8g %11.3e %11.4g %8.1fs %8.0fs\n", s.phase.c_str(),
-                 static_cast<long long>(s.iteration), s.cost, s.ml_cost, s.rel_change, s.rmse, s.elapsed, eta);
+    char rmse[32] = "n/a";  // no truth
+    if (std::isfinite(s.rmse)) std::snprintf(rmse, sizeof rmse, "%.4g", s.rmse);
+    std::fprintf(stderr, "%-10s %10lld %14.8g %14.8g %11.3e %11s %8.1fs %8.0fs\n", s.phase.c_str(),
+                 static_cast<long long>(s.iteration), s.cost, s.ml_cost, s.rel_change, rmse, s.elapsed, eta);
     return CallbackReturn::kContinue;
   }
 
@@ -106,6 +108,31 @@ void print_problem_report(const LocalizationProblem& prob, const ProblemReport& 
                  static_cast<long long>(rep.few_measurements), ids.c_str(),
                  rep.unlocalizable > static_cast<GlobalId>(rep.unlocalizable_sample.size()) ? " ..." : "");
   }
+  // Before any iteration: a run that cannot place most sensors says so, and what to change.
+  if (2 * rep.unlocalizable > prob.num_sensors())
+    std::fprintf(stderr,
+                 "warning: most sensors (%lld of %lld) cannot be localized (%lld without anchors in their component, "
+                 "%lld with too few measurements, the rest flagged by the file, e.g. flexible); the solve will not "
+                 "place them. Regenerate with more anchors (snl generate --anchors auto or K) or a higher average "
+                 "degree (--avg-degree; the default is localizable, docs/generator.md).\n",
+                 static_cast<long long>(rep.unlocalizable), static_cast<long long>(prob.num_sensors()),
+                 static_cast<long long>(rep.unanchored), static_cast<long long>(rep.few_measurements));
+}
+
+// After a run stopped by --max-iter with a tolerance set: how far from it, and what to change.
+void report_iteration_cap(const SolveCommand& cmd, const Summary& s) {
+  if (s.termination != TerminationType::kNoConvergence || !(cmd.solver.tol > 0) || s.history.empty()) return;
+  const IterationSummary& last = s.history.back();
+  std::fprintf(stderr, "snl solve: the %s phase stopped at --max-iter %lld ", last.phase.c_str(),
+               static_cast<long long>(cmd.solver.max_iter));
+  if (std::isfinite(last.rel_change) && last.rel_change > 0)
+    std::fprintf(stderr, "with relative change %.3g, %.3g times --tol %.3g", last.rel_change,
+                 last.rel_change / cmd.solver.tol, cmd.solver.tol);
+  else
+    std::fprintf(stderr, "before --tol %.3g was met", cmd.solver.tol);
+  std::fprintf(stderr,
+               ". To converge, raise --max-iter (or resume with --checkpoint/--restart), or loosen --tol; if many "
+               "sensors cannot be localized (see above), fix the network instead.\n");
 }
 
 // Reads the network and partitions it over the ranks.
@@ -282,6 +309,8 @@ std::string json_summary(const SolveCommand& cmd, const LoadedProblem& lp, const
   if (s.errors.valid) {
     j.add("rmse", s.errors.rmse).add("mpe", s.errors.mpe);
     j.add("rmse_localizable", s.errors.rmse_localizable).add("mpe_localizable", s.errors.mpe_localizable);
+    if (!std::isfinite(s.errors.rmse_localizable))  // null above: over an empty set
+      j.add("localizable_metrics_reason", "no sensor can be localized");
   }
   return j.str();
 }
@@ -312,6 +341,7 @@ int run_solve(const SolveCommand& cmd, MPI_Comm comm) {
   if (!cmd.json.empty())
     detail::write_text_on_root(cmd.json, json_summary(cmd, lp, s, t, memory_totals(*lp.prob, comm)), comm);
   if (talk) std::fprintf(stderr, "%s\n", s.brief_report().c_str());
+  if (talk) report_iteration_cap(cmd, s);
   return s.termination == TerminationType::kFailure ? 4 : 0;
 }
 

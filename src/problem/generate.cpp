@@ -1,11 +1,13 @@
-// Random geometric networks (seed 003, Sec. V): sensors uniform in [0,1]^p,
-// anchors at the corners or random, exact-degree radius, noise of eq. (28).
+// Random geometric networks (seed 003, Sec. V): sensors uniform in [0,L]^p
+// (L = 1 up to kReferenceSensors, then constant density), anchors at the
+// corners and/or random, exact-degree radius, noise of eq. (28).
 #include "snl/problem/generate.hpp"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <iomanip>
 #include <limits>
 #include <sstream>
 #include <vector>
@@ -22,6 +24,8 @@ std::string GenerateOptions::validate() const {
     os << "--sensors must be at most " << std::numeric_limits<std::int32_t>::max() << " (got " << sensors << ")";
   } else if (dim != 2 && dim != 3) {
     os << "--dim must be 2 or 3 (got " << dim << ")";
+  } else if (avg_degree == kAutoDegree) {
+    // resolved by default_avg_degree(dim)
   } else if (!std::isfinite(avg_degree) || avg_degree < 0) {
     os << "--avg-degree must be a finite number >= 0 (got " << avg_degree << ")";
   } else if (avg_degree > static_cast<double>(sensors - 1)) {
@@ -29,7 +33,11 @@ std::string GenerateOptions::validate() const {
        << sensors - 1 << ")";
   } else if (!std::isfinite(sigma) || sigma < 0) {
     os << "--sigma must be a finite number >= 0 (got " << sigma << ")";
-  } else if (num_random_anchors < 0) {
+  } else if (!std::isfinite(sigma_rel) || sigma_rel < 0) {
+    os << "--sigma-rel must be a finite number >= 0 (got " << sigma_rel << ")";
+  } else if (!std::isfinite(side) || side > 1e12) {
+    os << "--side must be a finite number <= 1e12 (got " << side << ")";
+  } else if (num_random_anchors < kAutoAnchors) {
     os << "--anchors must be 'corners' or a positive count (got " << num_random_anchors << ")";
   } else if (!std::isfinite(anchor_radius)) {
     os << "--anchor-radius must be finite (got " << anchor_radius << ")";
@@ -37,6 +45,14 @@ std::string GenerateOptions::validate() const {
     os << "--max-draws must be at least 1 (got " << max_draws << ")";
   }
   return os.str();
+}
+
+double default_avg_degree(int dim) { return dim == 3 ? 24.0 : 16.0; }
+
+double region_side(const GenerateOptions& opt) {
+  if (opt.side > 0) return opt.side;
+  if (opt.sensors <= kReferenceSensors) return 1.0;
+  return std::pow(static_cast<double>(opt.sensors) / static_cast<double>(kReferenceSensors), 1.0 / opt.dim);
 }
 
 namespace {
@@ -68,6 +84,20 @@ inline double dist2(const double* a, const double* b) {
   double s = 0;
   for (int d = 0; d < P; ++d) {
     const double t = a[d] - b[d];
+    s += t * t;
+  }
+  return s;
+}
+
+// Squared distance of the points scale * a and scale * b, rounded as when
+// computed from the scaled coordinates themselves (so ranges match the stored
+// truth exactly); dist2 for scale 1.
+template <int P>
+inline double scaled_dist2(const double* a, const double* b, double scale) {
+  if (scale == 1.0) return dist2<P>(a, b);
+  double s = 0;
+  for (int d = 0; d < P; ++d) {
+    const double t = scale * a[d] - scale * b[d];
     s += t * t;
   }
   return s;
@@ -271,9 +301,10 @@ EdgeCsr sensor_edges_brute(const std::vector<double>& x, std::size_t n, std::uin
 
 // Anchor edges (i, k) with ||x_i - a_k||^2 <= ar2, sorted by (i, k); anchors
 // bucketed in a grid so that many random anchors stay cheap.
+// x and anchors in unit-cube coordinates; true distances are scale times theirs.
 template <int P>
 void anchor_edges(const std::vector<double>& x, std::size_t n, const std::vector<double>& anchors, double ar2,
-                  std::uint64_t seed, double sigma, Network& net) {
+                  double scale, std::uint64_t seed, double sigma, Network& net) {
   const std::size_t m = anchors.size() / P;
   if (m == 0 || ar2 < 0) return;
   const double ar = std::sqrt(ar2);
@@ -297,7 +328,7 @@ void anchor_edges(const std::vector<double>& x, std::size_t n, const std::vector
         }
     std::sort(hits.begin(), hits.end());
     for (const std::int32_t kk : hits) {
-      const double d = std::sqrt(dist2<P>(xi, &anchors[std::size_t(kk) * P]));
+      const double d = std::sqrt(scaled_dist2<P>(xi, &anchors[std::size_t(kk) * P], scale));
       const std::uint64_t counter = static_cast<std::uint64_t>(i) * m + static_cast<std::uint64_t>(kk);
       net.anchor_edges.push_back(static_cast<GlobalId>(i));
       net.anchor_edges.push_back(kk);
@@ -315,23 +346,26 @@ Network draw_network(const GenerateOptions& opt, std::uint64_t seed, bool brute,
   net.dim = P;
   net.num_sensors = opt.sensors;
   net.has_truth = true;
-  net.sigma = opt.sigma;
+  // Everything is drawn and linked in the unit cube, then scaled by L (exact for L = 1).
+  const double L = region_side(opt);
   net.truth.resize(n * P);
   for (std::size_t c = 0; c < n * P; ++c) net.truth[c] = uniform01(seed, RngStream::kSensorPositions, c);
 
-  if (opt.num_random_anchors > 0) {
-    const std::size_t m = static_cast<std::size_t>(opt.num_random_anchors);
-    net.anchors.resize(m * P);
-    for (std::size_t c = 0; c < m * P; ++c) net.anchors[c] = uniform01(seed, RngStream::kAnchorPositions, c);
-  } else {
+  if (opt.num_random_anchors <= 0) {
     // The 2^p corners of the unit square/cube (003, Sec. V): bit d of k is coordinate d.
     for (int k = 0; k < (1 << P); ++k)
       for (int d = 0; d < P; ++d) net.anchors.push_back(static_cast<double>((k >> d) & 1));
   }
+  const std::size_t m = opt.num_random_anchors > 0 ? static_cast<std::size_t>(opt.num_random_anchors)
+                        : opt.num_random_anchors == kAutoAnchors ? n / 100
+                                                                 : 0;
+  for (std::size_t c = 0; c < m * P; ++c) net.anchors.push_back(uniform01(seed, RngStream::kAnchorPositions, c));
 
   const auto k = static_cast<std::uint64_t>(std::llround(opt.avg_degree * static_cast<double>(n) / 2.0));
   EdgeCsr csr = brute ? sensor_edges_brute<P>(net.truth, n, k) : sensor_edges_grid<P>(net.truth, n, k);
   const std::size_t E = csr.col.size();
+  const double sigma = opt.sigma_rel > 0 ? opt.sigma_rel * L * std::sqrt(csr.r2) : opt.sigma;
+  net.sigma = sigma;
   net.sensor_edges.resize(2 * E);
   net.sensor_ranges.resize(E);
   for (std::size_t i = 0; i < n; ++i) {
@@ -340,28 +374,67 @@ Network draw_network(const GenerateOptions& opt, std::uint64_t seed, bool brute,
       net.sensor_edges[2 * e] = static_cast<GlobalId>(i);
       net.sensor_edges[2 * e + 1] = static_cast<GlobalId>(j);
       // 003, eq. (28); the counter depends on the pair only, not on its row.
-      const double d = csr.dist[e];
+      const double d = L == 1.0 ? csr.dist[e] : std::sqrt(scaled_dist2<P>(&net.truth[i * P], &net.truth[j * P], L));
       net.sensor_ranges[e] =
-          opt.sigma > 0 ? std::abs(d + opt.sigma * standard_normal(seed, RngStream::kSensorNoise, i * n + j)) : d;
+          sigma > 0 ? std::abs(d + sigma * standard_normal(seed, RngStream::kSensorNoise, i * n + j)) : d;
     }
   }
   const double r2 = csr.r2;
   csr = EdgeCsr();
 
-  const double ar2 = opt.anchor_radius < 0 ? r2 : opt.anchor_radius * opt.anchor_radius;
-  anchor_edges<P>(net.truth, n, net.anchors, ar2, seed, opt.sigma, net);
+  const double ar_unit = opt.anchor_radius / L;
+  const double ar2 = opt.anchor_radius < 0 ? r2 : ar_unit * ar_unit;
+  anchor_edges<P>(net.truth, n, net.anchors, ar2, L, seed, sigma, net);
+  if (L != 1.0) {
+    for (double& v : net.truth) v *= L;
+    for (double& v : net.anchors) v *= L;
+  }
 
   net.total_sensor_edges = net.local_sensor_edges();
   net.total_anchor_edges = net.local_anchor_edges();
-  rep.radius = std::sqrt(r2);
-  rep.anchor_radius = std::sqrt(ar2);
+  rep.radius = L * std::sqrt(r2);
+  rep.anchor_radius = L * std::sqrt(ar2);
+  rep.side = L;
+  rep.sigma = sigma;
   rep.achieved_avg_degree = 2.0 * static_cast<double>(E) / static_cast<double>(n);
   rep.draw_seed = seed;
   return net;
 }
 
-Network generate_impl(const GenerateOptions& opt, GenerateReport* report, bool brute) {
-  const std::string msg = opt.validate();
+// Sensors with at least one localizability flag.
+std::size_t count_flagged(const std::vector<std::uint8_t>& flags) {
+  return static_cast<std::size_t>(std::count_if(flags.begin(), flags.end(), [](std::uint8_t f) { return f != 0; }));
+}
+
+// The warning for a network returned although not (fully) localizable: the
+// numbers, and what to change. Empty when at most 1% of the sensors are
+// affected after a run that was not asked to redraw, or none at all.
+std::string localizability_warning(const GenerateOptions& opt, const GenerateReport& rep, bool redrew,
+                                   GlobalId num_anchors) {
+  const LocalizabilityReport& lr = rep.localizability;
+  const std::size_t bad = count_flagged(lr.flags), n = lr.flags.size();
+  if (bad == 0 || (!redrew && 100 * bad <= n)) return "";
+  std::ostringstream os;
+  os << "warning: ";
+  if (redrew) os << "no fully localizable network in " << rep.draws << " draw(s); the last draw is written. ";
+  os << bad << " of " << n << " sensors (" << std::setprecision(3) << 100.0 * static_cast<double>(bad) / static_cast<double>(n)
+     << "%) cannot be localized: " << lr.unanchored.size() << " in components without anchors, "
+     << lr.few_measurements.size() << " with fewer than " << opt.dim + 1 << " measurements, " << lr.not_rigid.size()
+     << " in flexible parts" << (lr.rigidity_checked ? "" : " (rigidity not checked)") << ". Average degree "
+     << std::setprecision(4) << rep.achieved_avg_degree << ", " << num_anchors
+     << " anchors. Raise --avg-degree (docs/generator.md; the default, " << default_avg_degree(opt.dim)
+     << ", makes networks of any size localizable but for a few sensors in 10^5), add anchors (--anchors K), or give "
+        "--localizable yes to insist.";
+  return os.str();
+}
+
+Network generate_impl(const GenerateOptions& options, GenerateReport* report, bool brute) {
+  std::string msg = options.validate();
+  GenerateOptions opt = options;
+  if (opt.avg_degree == kAutoDegree) {
+    // Small networks: at most the complete graph.
+    opt.avg_degree = std::min(default_avg_degree(opt.dim), static_cast<double>(std::max<GlobalId>(opt.sensors - 1, 0)));
+  }
   if (!msg.empty()) throw Error("generate: " + msg);
   using L = GenerateOptions::Localizable;
   const GlobalId n = opt.sensors;
@@ -393,6 +466,7 @@ Network generate_impl(const GenerateOptions& opt, GenerateReport* report, bool b
   if (n <= kRigidityLimit && !rep.localizability.rigidity_checked)
     rep.localizability = analyze_localizability(net, true);
   net.localizability = rep.localizability.flags;
+  rep.warning = localizability_warning(opt, rep, redraw, net.num_anchors());
   if (report) *report = rep;
   return net;
 }

@@ -25,6 +25,8 @@ GenerateOptions opts(snl::GlobalId n, int dim, double deg, double sigma = 0.01, 
   o.sigma = sigma;
   o.seed = seed;
   o.localizable = Loc::kNo;
+  o.num_random_anchors = 0;  // the papers' setting: corners, unit square
+  o.side = 1.0;
   return o;
 }
 
@@ -156,7 +158,11 @@ TEST(Generate, EdgeSetIsAllPairsWithinRadius) {
 
 TEST(Generate, ZeroSigmaGivesExactDistances) {
   const int dim = 2;
-  const Network net = snl::generate_network(opts(2000, dim, 6.0, 0.0));
+  auto o = opts(3000, dim, 6.0, 0.0);
+  o.side = 0;  // auto: a square of side sqrt(3); the ranges are the distances of the scaled truth, to the bit
+  o.num_random_anchors = snl::kAutoAnchors;
+  const Network net = snl::generate_network(o);
+  ASSERT_EQ(net.num_anchors(), 4 + 30);
   for (snl::GlobalId e = 0; e < net.local_sensor_edges(); ++e) {
     const auto i = net.sensor_edges[2 * e], j = net.sensor_edges[2 * e + 1];
     ASSERT_DOUBLE_EQ(net.sensor_ranges[e], std::sqrt(dist2(&net.truth[i * dim], &net.truth[j * dim], dim)));
@@ -301,6 +307,64 @@ TEST(Generate, ThrowsWhenNoDrawIsLocalizable) {
   EXPECT_TRUE(any);
 }
 
+// The defaults: corners + 1% random anchors, the default degree, a region
+// growing at constant density; default networks are localizable (redrawn).
+TEST(Generate, DefaultNetworksAreLocalizable) {
+  for (const snl::GlobalId n : {2000, 20000}) {
+    GenerateOptions o;
+    o.sensors = n;
+    GenerateReport rep;
+    const Network net = snl::generate_network(o, &rep);
+    EXPECT_TRUE(rep.localizability.rigidity_checked) << "n=" << n;
+    EXPECT_TRUE(rep.localizability.localizable()) << "n=" << n << ": " << rep.localizability.summary();
+    EXPECT_EQ(rep.warning, "") << "n=" << n;
+    EXPECT_EQ(net.num_anchors(), 4 + n / 100);
+    EXPECT_NEAR(rep.achieved_avg_degree, snl::default_avg_degree(2), 0.01);
+    EXPECT_DOUBLE_EQ(rep.side, std::sqrt(static_cast<double>(n) / snl::kReferenceSensors));
+    for (const double v : net.truth) ASSERT_TRUE(v >= 0 && v <= rep.side);
+    // The noise regime does not depend on n: sigma / radius is about that of 1,000 sensors in the unit square.
+    EXPECT_NEAR(rep.radius, 0.0715, 0.004) << "n=" << n;
+  }
+}
+
+TEST(Generate, RegionSideAndRelativeSigma) {
+  GenerateOptions o;
+  o.sensors = 1000;
+  EXPECT_EQ(snl::region_side(o), 1.0);
+  o.sensors = 8000;
+  o.dim = 3;
+  EXPECT_DOUBLE_EQ(snl::region_side(o), 2.0);
+  o.side = 0.5;
+  EXPECT_EQ(snl::region_side(o), 0.5);
+  auto r = opts(500, 2, 8.0, 0.01, 9);
+  r.sigma_rel = 0.05;
+  GenerateReport rep;
+  const Network net = snl::generate_network(r, &rep);
+  ASSERT_TRUE(net.sigma.has_value());
+  EXPECT_DOUBLE_EQ(*net.sigma, 0.05 * rep.radius);
+  EXPECT_DOUBLE_EQ(rep.sigma, *net.sigma);
+  r.sigma_rel = -1;
+  EXPECT_NE(r.validate(), "");
+}
+
+TEST(Generate, WarnsWithNumbersWhenNotLocalizable) {
+  auto o = opts(2000, 2, 6.0);  // the papers' corners at 2,000 sensors: hopeless
+  o.localizable = Loc::kAuto;
+  o.max_draws = 3;
+  GenerateReport rep;
+  snl::generate_network(o, &rep);
+  EXPECT_NE(rep.warning.find("no fully localizable network in 3 draw(s)"), std::string::npos) << rep.warning;
+  EXPECT_NE(rep.warning.find("of 2000 sensors"), std::string::npos) << rep.warning;
+  EXPECT_NE(rep.warning.find("--avg-degree"), std::string::npos) << rep.warning;
+  // Without redraws: a warning only above 1% of the sensors.
+  o.localizable = Loc::kNo;
+  o.avg_degree = 16;
+  o.num_random_anchors = snl::kAutoAnchors;
+  o.side = 0;
+  snl::generate_network(o, &rep);
+  EXPECT_EQ(rep.warning, "") << rep.warning;
+}
+
 TEST(Generate, NoRedrawFillsFlags) {
   GenerateReport rep;
   const Network net = snl::generate_network(opts(30000, 2, 5.0), &rep);
@@ -315,7 +379,8 @@ TEST(Generate, Validation) {
   EXPECT_EQ(opts(10, 2, 4.3).validate(), "");
   EXPECT_NE(opts(0, 2, 4.3).validate(), "");
   EXPECT_NE(opts(10, 4, 4.3).validate(), "");
-  EXPECT_NE(opts(10, 2, -1).validate(), "");
+  EXPECT_EQ(opts(10, 2, snl::kAutoDegree).validate(), "");
+  EXPECT_NE(opts(10, 2, -2).validate(), "");
   EXPECT_NE(opts(10, 2, 9.5).validate(), "");
   EXPECT_NE(opts(10, 2, NAN).validate(), "");
   EXPECT_NE(opts(10, 2, 4.3, -0.1).validate(), "");
