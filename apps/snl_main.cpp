@@ -46,6 +46,11 @@ void add_generate(CLI::App& app, Commands& c) {
   g->add_option("--dim", c.gen.options.dim, "dimension p (2 or 3)")->capture_default_str();
   g->add_option("--avg-degree", c.gen.options.avg_degree, "average sensor-sensor degree")->capture_default_str();
   g->add_option("--sigma", c.gen.options.sigma, "range noise standard deviation (003 eq. 28)")->capture_default_str();
+  g->add_option("--noise", c.gen.noise.model, "gaussian|multiplicative (sigma_e = sigma * true distance)")
+      ->capture_default_str();
+  g->add_option("--nlos-fraction", c.gen.noise.nlos_fraction, "share of ranges with a positive NLOS bias")
+      ->capture_default_str();
+  g->add_option("--nlos-bias", c.gen.noise.nlos_bias, "NLOS bias uniform in [0, B]")->capture_default_str();
   g->add_option("--anchors", c.anchors, "'corners' or a number K of random anchors")->capture_default_str();
   g->add_option("--anchor-radius", c.gen.options.anchor_radius, "anchor link radius (default: sensor radius)");
   g->add_option("--seed", c.gen.options.seed, "random seed")->capture_default_str();
@@ -86,6 +91,12 @@ void add_solve(CLI::App& app, Commands& c) {
   s->add_option("--temporal-block", c.solve.solver.temporal_block,
                 "iterations per pass over memory (same iterates; tests and records at pass ends; " +
                     honoured_by(&Info::temporal_blocking) + ")")
+      ->capture_default_str();
+  s->add_option("--weights", c.solve.solver.weights,
+                "file|multiplicative:NF|none: ML weights 1/sigma^2 (auto: file when the network has sigmas; " +
+                    honoured_by(&Info::measurement_model) + ")")
+      ->capture_default_str();
+  s->add_option("--loss", c.solve.solver.loss, "l2|huber:DELTA (" + honoured_by(&Info::measurement_model) + ")")
       ->capture_default_str();
   s->add_option("--json", c.solve.json, "write a JSON summary");
   s->add_option("--checkpoint", c.solve.checkpoint, "write checkpoints to this file (atomically replaced)");

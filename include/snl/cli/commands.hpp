@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "snl/problem/generate.hpp"
+#include "snl/problem/noise.hpp"
 #include "snl/solvers/solver.hpp"
 
 namespace snl {
@@ -24,6 +25,7 @@ constexpr int kExitUsage = 2;
 struct GenerateCommand {
   std::string output;
   GenerateOptions options;
+  NoiseOptions noise;  ///< --noise, --nlos-fraction, --nlos-bias
   bool quiet = false;
 };
 void run_generate(const GenerateCommand& cmd, MPI_Comm comm);
