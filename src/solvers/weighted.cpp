@@ -21,11 +21,32 @@ namespace {
 using detail::project_sphere;
 using detail::with_ghost_rows;
 
+// Weights spread over orders of magnitude (1/d^2 for multiplicative noise), so
+// one global step 1/L moves the lightly weighted nodes far too slowly. Both
+// methods therefore take per-node steps from a diagonal majorizer D >= the
+// Hessian (Gershgorin: D - H is diagonally dominant), a local, parameter-free
+// quantity; with D = L I they would be the paper's methods.
+
+// Per owned node: (sum_j w_ij, sum_k w_ik).
+std::vector<std::pair<double, double>> node_weight_sums(const LocalizationProblem& prob) {
+  const MeasurementModel& mo = prob.model();
+  const auto& off = prob.graph().offsets();
+  const auto& aoff = prob.anchor_offsets();
+  std::vector<std::pair<double, double>> s(prob.num_owned(), {0.0, 0.0});
+  for (LocalId v = 0; v < prob.num_owned(); ++v) {
+    for (auto e = off[v]; e < off[v + 1]; ++e) s[v].first += mo.edge_weight(e);
+    for (auto e = aoff[v]; e < aoff[v + 1]; ++e) s[v].second += mo.anchor_weight(e);
+  }
+  return s;
+}
+
 // Disk relaxation by Nesterov's method (003, Alg. 1) on
 //   f_hat(x) = sum_e w_e rho(dist(z_e, B(d_e))),  z_e = x_i - x_j (or x_i - a_k),
 // rho = r^2/2 or Huber: convex, with gradient sum_e w_e rho'(t)/t (z - P_B z)
-// (relaxed_gradient) and L = 2 max_i sum_j w_ij + max_i sum_k w_ik
-// (relaxation_lipschitz; Huber does not raise it).
+// (relaxed_gradient). Each term is 1-smooth in z_e (Huber too), so the Hessian
+// is at most the weighted Laplacian plus the anchor diagonal, which is at most
+// D = diag(2 sum_j w_ij + sum_k w_ik) (003 eq. 16 per node): Nesterov's method
+// in the D-metric, x(k) = w - D^-1 grad f_hat(w), keeps the O(1/k^2) rate.
 class ModelRelaxation final : public Algorithm {
  public:
   explicit ModelRelaxation(LocalizationProblem& prob) : prob_(prob), L_(relaxation_lipschitz(prob)) {}
@@ -38,10 +59,16 @@ class ModelRelaxation final : public Algorithm {
     prev_ = x_;
     w_.assign(x_.size(), 0.0);
     g_.assign(std::size_t(prob_.num_owned()) * prob_.dim(), 0.0);
+    dinv_.assign(prob_.num_owned(), 0.0);
+    const auto sums = node_weight_sums(prob_);
+    for (LocalId v = 0; v < prob_.num_owned(); ++v) {
+      const double D = 2.0 * sums[v].first + sums[v].second;
+      dinv_[v] = D > 0 ? 1.0 / D : 0.0;  // a node without measurements stays
+    }
     k_ = 0;
   }
 
-  // w = x(k-1) + (k-2)/(k+1) (x(k-1) - x(k-2)); x(k) = w - grad f_hat(w) / L.
+  // w = x(k-1) + (k-2)/(k+1) (x(k-1) - x(k-2)); x(k) = w - D^-1 grad f_hat(w).
   void iterate() override {
     const std::size_t m = std::size_t(prob_.num_owned()) * prob_.dim();
     const double beta = static_cast<double>(k_ - 1) / static_cast<double>(k_ + 2);
@@ -50,7 +77,7 @@ class ModelRelaxation final : public Algorithm {
     relaxed_gradient(prob_, w_.data(), g_.data(), 0, prob_.num_owned());
     double d = 0, s = 0, gs = 0;
     for (std::size_t t = 0; t < m; ++t) {
-      const double now = w_[t] - g_[t] / L_;
+      const double now = w_[t] - g_[t] * dinv_[t / prob_.dim()];
       prev_[t] = x_[t];
       x_[t] = now;
       d += (now - prev_[t]) * (now - prev_[t]);
@@ -92,7 +119,7 @@ class ModelRelaxation final : public Algorithm {
  private:
   LocalizationProblem& prob_;
   double L_;
-  std::vector<double> x_, prev_, w_, g_;
+  std::vector<double> x_, prev_, w_, g_, dinv_;  // dinv_: 1/D per owned node
   std::int64_t k_ = 0;
   double diff_sq_ = 0, x_sq_ = 0, gsq_ = 0;
 };
@@ -101,12 +128,15 @@ class ModelRelaxation final : public Algorithm {
 // alike, |y_e| = d_e: min over y of Phi is the (weighted, Huber) ML cost. At
 // the current iterate, rho(|u|) <= rho(|u0|) + omega/2 (|u|^2 - |u0|^2) with
 // omega = rho'(|u0|)/|u0| = min(1, delta/|u0|) (1 for l2), so one projected
-// gradient step with step 1/L on the quadratic Q = 1/2 sum w_e omega_e
-// |x_i - x_j - y_e|^2 decreases Q and hence Phi: monotone and parameter-free,
-// with L = 2 max_i sum_j w_ij + max_i sum_k w_ik + 2 (the paper's eq. 9 with
-// weights; omega <= 1 keeps it a bound). The updates (eqs. 11-13):
-//   x_i -= (1/L) sum_e s_e w_e omega_e (dz_e - y_e),
-//   y_e <- P_sphere(y_e + (w_e omega_e / L) (dz_e - y_e)).
+// gradient step on the quadratic Q = 1/2 sum w_e omega_e |x_i - x_j - y_e|^2
+// with a diagonal majorizer D of its Hessian decreases Q and hence Phi:
+// monotone and parameter-free. The Hessian of an edge's term in (x_i, x_j,
+// y_e) is w omega [1 -1 -1; -1 1 1; -1 1 1] (an anchor's in (x_i, w_ik):
+// w omega [1 -1; -1 1]); Gershgorin with omega <= 1 gives D_x_i = 3 sum_j w_ij
+// + 2 sum_k w_ik, D_y_e = 3 w_e, D_w_ik = 2 w_ik. Each y block is a multiple
+// of I, so its step is still the Euclidean projection (000, eqs. 11-13):
+//   x_i -= D_x_i^-1 sum_e s_e w_e omega_e (dz_e - y_e),
+//   y_e <- P_sphere(y_e + (omega_e / 3) (dz_e - y_e))   (anchors: omega / 2).
 class ModelMM final : public Algorithm {
  public:
   explicit ModelMM(LocalizationProblem& prob)
@@ -124,6 +154,12 @@ class ModelMM final : public Algorithm {
       init<2>();
     else
       init<3>();
+    dinv_.assign(prob_.num_owned(), 0.0);
+    const auto sums = node_weight_sums(prob_);
+    for (LocalId v = 0; v < prob_.num_owned(); ++v) {
+      const double D = 3.0 * sums[v].first + 2.0 * sums[v].second;
+      dinv_[v] = D > 0 ? 1.0 / D : 0.0;
+    }
   }
 
   void iterate() override {
@@ -195,17 +231,18 @@ class ModelMM final : public Algorithm {
     return fwd ? 1.0 : -1.0;
   }
 
-  // One edge variable: acc += sgn omega w (dz - y), y <- P_sphere(y + (omega w / L)(dz - y)).
+  // One edge variable: acc += sgn omega w (dz - y), y <- P_sphere(y + (omega / Dy)(dz - y)).
   template <int P>
-  void edge_update(const double* dz, double sgn, double weight, double rho, double* y, double* acc) const {
+  void edge_update(const double* dz, double sgn, double weight, double Dy, double rho, double* y, double* acc) const {
     double r[P], s = 0;
     for (int c = 0; c < P; ++c) {
       r[c] = dz[c] - y[c];
       s += r[c] * r[c];
     }
-    const double a = weight * huber_factor(prob_.model().huber_delta, std::sqrt(s));
+    const double om = huber_factor(prob_.model().huber_delta, std::sqrt(s));
+    const double a = weight * om;
     for (int c = 0; c < P; ++c) acc[c] += sgn * a * r[c];
-    const double step = a / L_;
+    const double step = om / Dy;
     for (int c = 0; c < P; ++c) y[c] += step * r[c];
     project_sphere<P>(rho, y);
   }
@@ -221,16 +258,16 @@ class ModelMM final : public Algorithm {
       double acc[P] = {}, dz[P];
       for (auto e = off[v]; e < off[v + 1]; ++e) {
         const double sgn = oriented_diff<P>(v, gr.adjacency()[e], dz);
-        edge_update<P>(dz, sgn, mo.edge_weight(e), gr.edge_value(e), &y_[std::size_t(e) * P], acc);
+        edge_update<P>(dz, sgn, mo.edge_weight(e), 3.0, gr.edge_value(e), &y_[std::size_t(e) * P], acc);
       }
       for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
         const double* a = &prob_.anchors()[std::size_t(prob_.anchor_ids()[e]) * P];
         for (int c = 0; c < P; ++c) dz[c] = x_[std::size_t(v) * P + c] - a[c];
-        edge_update<P>(dz, 1.0, mo.anchor_weight(e), prob_.anchor_ranges()[e], &aw_[std::size_t(e) * P], acc);
+        edge_update<P>(dz, 1.0, mo.anchor_weight(e), 2.0, prob_.anchor_ranges()[e], &aw_[std::size_t(e) * P], acc);
       }
       for (int c = 0; c < P; ++c) {
         const std::size_t t = std::size_t(v) * P + c;
-        xn_[t] = x_[t] - acc[c] / L_;
+        xn_[t] = x_[t] - acc[c] * dinv_[v];
         d += (xn_[t] - x_[t]) * (xn_[t] - x_[t]);
         s += xn_[t] * xn_[t];
       }
@@ -271,6 +308,7 @@ class ModelMM final : public Algorithm {
   LocalizationProblem& prob_;
   double L_;
   std::vector<double> x_, xn_, y_, aw_;  // y_: P per CSR slot; aw_: P per anchor measurement
+  std::vector<double> dinv_;             // 1 / D_x per owned node
   double diff_sq_ = 0, x_sq_ = 0;
 };
 

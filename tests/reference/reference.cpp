@@ -308,15 +308,15 @@ namespace snl::reference {
 namespace {
 double huber(double d, double r) { return d > 0 && r > d ? d * r - 0.5 * d * d : 0.5 * r * r; }
 double omega(double d, double r) { return d > 0 && r > d ? d / r : 1.0; }
-// max_i sum_j w_ij and max_i sum_k w_ik.
-std::pair<double, double> weight_sums(const Network& net, const Model& m) {
-  std::vector<double> s(net.num_sensors, 0.0), a(net.num_sensors, 0.0);
+// Per sensor: cs * sum_j w_ij + ca * sum_k w_ik (the diagonal majorizer D).
+std::vector<double> diag_majorizer(const Network& net, const Model& m, double cs, double ca) {
+  std::vector<double> D(net.num_sensors, 0.0);
   for (std::size_t e = 0; e < net.sensor_ranges.size(); ++e) {
-    s[net.sensor_edges[2 * e]] += m.sensor_w[e];
-    s[net.sensor_edges[2 * e + 1]] += m.sensor_w[e];
+    D[net.sensor_edges[2 * e]] += cs * m.sensor_w[e];
+    D[net.sensor_edges[2 * e + 1]] += cs * m.sensor_w[e];
   }
-  for (std::size_t e = 0; e < net.anchor_ranges.size(); ++e) a[net.anchor_edges[2 * e]] += m.anchor_w[e];
-  return {*std::max_element(s.begin(), s.end()), *std::max_element(a.begin(), a.end())};
+  for (std::size_t e = 0; e < net.anchor_ranges.size(); ++e) D[net.anchor_edges[2 * e]] += ca * m.anchor_w[e];
+  return D;
 }
 }  // namespace
 
@@ -377,14 +377,13 @@ std::vector<double> model_relaxed_gradient(const Network& net, const Model& m, c
 }
 
 std::vector<double> model_nesterov(const Network& net, const Model& m, const std::vector<double>& x0, int iters) {
-  const auto [ws, wa] = weight_sums(net, m);
-  const double L = 2.0 * ws + wa;
+  const auto D = diag_majorizer(net, m, 2.0, 1.0);
   std::vector<double> x = x0, xm = x0, w(x0.size());
   for (int k = 1; k <= iters; ++k) {
     for (std::size_t t = 0; t < x.size(); ++t) w[t] = x[t] + (double(k) - 2) / (double(k) + 1) * (x[t] - xm[t]);
     const auto g = model_relaxed_gradient(net, m, w);
     xm = x;
-    for (std::size_t t = 0; t < x.size(); ++t) x[t] = w[t] - g[t] / L;
+    for (std::size_t t = 0; t < x.size(); ++t) x[t] = w[t] - g[t] / D[t / net.dim];
   }
   return x;
 }
@@ -392,8 +391,7 @@ std::vector<double> model_nesterov(const Network& net, const Model& m, const std
 std::vector<double> model_mm(const Network& net, const Model& m, const std::vector<double>& x0, int iters,
                              std::vector<double>* phi) {
   const int p = net.dim;
-  const auto [ws, wa] = weight_sums(net, m);
-  const double L = 2.0 * ws + wa + 2.0;
+  const auto D = diag_majorizer(net, m, 3.0, 2.0);
   const std::size_t E = net.sensor_ranges.size(), Ea = net.anchor_ranges.size();
   // Every measurement as (i, j or -1, anchor row, range, weight), j > i for sensor pairs.
   std::vector<GlobalId> ei(E + Ea), ej(E + Ea);
@@ -443,11 +441,11 @@ std::vector<double> model_mm(const Network& net, const Model& m, const std::vect
       for (int q = 0; q < p; ++q) {
         gx[ei[e] * p + q] += a * r[q];
         if (ej[e] >= 0) gx[ej[e] * p + q] -= a * r[q];
-        yn[e * p + q] = y[e * p + q] + a / L * r[q];
+        yn[e * p + q] = y[e * p + q] + omega(m.delta, std::sqrt(r2)) / (ej[e] >= 0 ? 3.0 : 2.0) * r[q];
       }
       sphere(rho[e], &yn[e * p], p);
     }
-    for (std::size_t q = 0; q < x.size(); ++q) x[q] -= gx[q] / L;
+    for (std::size_t q = 0; q < x.size(); ++q) x[q] -= gx[q] / D[q / p];
     y.swap(yn);
     if (phi) phi->push_back(Phi());
   }

@@ -48,10 +48,10 @@ Model model_from_sigmas(const Network& net, double delta);
 double model_ml_cost(const Network& net, const Model& m, const std::vector<double>& x);
 double model_relaxed_cost(const Network& net, const Model& m, const std::vector<double>& x);
 std::vector<double> model_relaxed_gradient(const Network& net, const Model& m, const std::vector<double>& x);
-/// 003 Algorithm 1 with L = 2 max_i sum_j w_ij + max_i sum_k w_ik.
+/// 003 Algorithm 1 with a step 1/D_i per sensor, D_i = 2 sum_j w_ij + sum_k w_ik.
 std::vector<double> model_nesterov(const Network& net, const Model& m, const std::vector<double>& x0, int iters);
 /// 000 Algorithm 1 with the Huber majorizer weights omega = min(1, delta/|x_i - x_j - y|)
-/// and L = 2 max_i sum_j w_ij + max_i sum_k w_ik + 2; the objective
+/// and steps 1/D: D_x_i = 3 sum_j w_ij + 2 sum_k w_ik, D_y = 3 w_e (anchors 2 w); the objective
 /// Phi = sum w rho(|x_i - x_j - y|) + anchors after each iteration into *phi.
 std::vector<double> model_mm(const Network& net, const Model& m, const std::vector<double>& x0, int iters,
                              std::vector<double>* phi = nullptr);
