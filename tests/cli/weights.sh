@@ -2,7 +2,7 @@
 # Weighted ML, the Huber loss and the generator's noise models end to end:
 # --noise multiplicative writes per-range sigmas, NLOS outliers are flagged at
 # about the asked fraction; --weights/--loss give the same positions on 1 and
-# 2 ranks; bad sigmas and bad --weights/--loss strings end in one clear error
+# 2 ranks, and a checkpoint resumes; bad sigmas and bad --weights/--loss strings end in one clear error
 # with the output untouched.
 source "$(dirname "$0")/common.bash"
 "$SNL" generate -o "$T/net.h5" --sensors 80 --avg-degree 8 --sigma 0.05 --seed 3 -q --noise multiplicative \
@@ -30,6 +30,17 @@ for opts in "--weights file --loss huber:0.05" "--weights multiplicative:0.05 --
   "$PY" -c "import h5py,sys,numpy as np; a,b=(h5py.File(f)['positions'][()] for f in sys.argv[1:]); sys.exit(0 if np.array_equal(a,b) else 1)" \
     "$T/a.h5" "$T/b.h5" || fail "$opts: 1 and 2 ranks differ"
 done
+# A checkpoint of a Huber, weighted pipeline resumes bit for bit on 2 ranks, and only with the same --loss.
+"$SNL" solve "$T/net.h5" -o "$T/full.h5" --loss huber:0.05 --max-iter 60 --tol 0 -q
+"$SNL" solve "$T/net.h5" -o "$T/part.h5" --loss huber:0.05 --max-iter 60 --tol 0 -q --checkpoint "$T/ck.h5" \
+  --checkpoint-every 40
+mpi 2 "$SNL" solve "$T/net.h5" -o "$T/res.h5" --loss huber:0.05 --max-iter 60 --tol 0 -q --restart "$T/ck.h5"
+"$PY" -c "import h5py,sys,numpy as np; a,b=(h5py.File(f)['positions'][()] for f in sys.argv[1:]); sys.exit(0 if np.array_equal(a,b) else 1)" \
+  "$T/full.h5" "$T/res.h5" || fail "Huber restart differs"
+if "$SNL" solve "$T/net.h5" -o "$T/res.h5" --max-iter 60 --tol 0 -q --restart "$T/ck.h5" 2> "$T/err"; then
+  fail "restart with another --loss accepted"
+fi
+grep -q "loss" "$T/err" || fail "restart refusal does not name --loss"
 # Bad sigmas in the file (negative, zero, NaN, wrong length), --weights file
 # without sigmas, bad option strings: one error, a non-zero exit, output untouched.
 "$SNL" generate -o "$T/plain.h5" --sensors 40 --seed 2 -q
