@@ -115,6 +115,9 @@ void add_eval(CLI::App& app, Commands& c) {
   e->add_option("network", c.eval.network, "network file")->required();
   e->add_option("result", c.eval.result, "result file (or any file with positions)")->required();
   e->add_flag("--crlb", c.eval.crlb, "also compute the Cramer-Rao lower bound (n <= 20000)");
+  e->add_option("--weights", c.eval.weights, "file|multiplicative:NF|none: weights of the ML cost (as snl solve)")
+      ->capture_default_str();
+  e->add_option("--loss", c.eval.loss, "l2|huber:DELTA: loss of the ML cost (as snl solve)")->capture_default_str();
   e->add_option("--sigma", c.eval.sigma, "noise standard deviation for --crlb (default: the network's)");
   e->add_option("--json", c.eval.json, "write a JSON summary");
 }

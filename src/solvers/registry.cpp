@@ -11,7 +11,8 @@ using A = AlgorithmId;
 
 // Capabilities, as the code has them: --temporal-block is honoured where
 // Algorithm::max_levels() > 1 (relaxation, MM); --grad-tol where grad_norm_sq()
-// is finite (relaxation, BB); --bb-rounds by BB alone.
+// is finite (relaxation, BB); --bb-rounds by BB alone; --weights/--loss where
+// the method reads prob.model() (all of these; a pipeline only if all its phases do).
 const std::vector<AlgorithmInfo> kRegistry = {
     // id             name           code  factory                   phases
     //   synchronous temporal_blocking gradient_stop consensus_rounds monotone_surrogate gap_certificate

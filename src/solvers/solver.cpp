@@ -40,6 +40,17 @@ std::string SolverOptions::validate() const {
   return unsupported_option();
 }
 
+namespace {
+// A method honours --weights/--loss when it and every phase it runs do (a
+// pipeline whose refinement ignores the model must not claim it).
+bool honours_model(const AlgorithmInfo& a) {
+  if (!a.measurement_model) return false;
+  for (AlgorithmId id : a.phases)
+    if (!algorithm_info(id).measurement_model) return false;
+  return true;
+}
+}  // namespace
+
 std::string SolverOptions::unsupported_option() const {
   const AlgorithmInfo* a = find_algorithm(algorithm);
   if (!a) return "";
@@ -58,7 +69,7 @@ std::string SolverOptions::unsupported_option() const {
       {loss != defaults.loss, "--loss", &AlgorithmInfo::measurement_model, "l2"},
   };
   for (const auto& c : checks)
-    if (c.set && !(a->*c.capability))
+    if (c.set && !(c.capability == &AlgorithmInfo::measurement_model ? honours_model(*a) : a->*c.capability))
       return std::string(c.option) + " is not honoured by --algorithm " + algorithm + " (only by " +
              algorithms_with(c.capability) + "); leave it out or give its default " + c.default_value;
   return "";
@@ -85,7 +96,7 @@ Solver::Solver(LocalizationProblem& prob, SolverOptions opt) : prob_(prob), opt_
   // The measurement model every phase and cost uses; --weights auto means
   // none for a method that cannot honour weights (explicit values are refused).
   WeightsSpec ws = parse_weights_spec(opt_.weights);
-  if (!find_algorithm(opt_.algorithm)->measurement_model) ws.kind = WeightsSpec::Kind::kNone;
+  if (!honours_model(*find_algorithm(opt_.algorithm))) ws.kind = WeightsSpec::Kind::kNone;
   prob_.set_measurement_model(ws, parse_loss_spec(opt_.loss));
 }
 

@@ -63,6 +63,7 @@ struct EvalCommand {
   bool crlb = false;
   double sigma = -1;  ///< < 0: the network's sigma
   std::string json;
+  std::string weights = "auto", loss = "l2";  ///< the ML cost's model, as snl solve --weights/--loss
 };
 void run_eval(const EvalCommand& cmd, MPI_Comm comm);
 
