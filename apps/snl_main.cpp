@@ -56,6 +56,11 @@ void add_generate(CLI::App& app, Commands& c) {
                 "side of the region (default: 1 up to 1000 sensors, then growing at constant density)");
   g->add_option("--anchors", c.anchors, "'auto' (corners + 1% random), 'corners' or a number K of random anchors")
       ->capture_default_str();
+  g->add_option("--noise", c.gen.noise.model, "gaussian|multiplicative (sigma_e = sigma * true distance)")
+      ->capture_default_str();
+  g->add_option("--nlos-fraction", c.gen.noise.nlos_fraction, "share of ranges with a positive NLOS bias")
+      ->capture_default_str();
+  g->add_option("--nlos-bias", c.gen.noise.nlos_bias, "NLOS bias uniform in [0, B]")->capture_default_str();
   g->add_option("--anchor-radius", c.gen.options.anchor_radius, "anchor link radius (default: sensor radius)");
   g->add_option("--seed", c.gen.options.seed, "random seed")->capture_default_str();
   g->add_option("--localizable", c.localizable, "auto|yes|no: redraw until localizable (auto: n <= 20000)")
@@ -96,6 +101,12 @@ void add_solve(CLI::App& app, Commands& c) {
                 "iterations per pass over memory (same iterates; tests and records at pass ends; " +
                     honoured_by(&Info::temporal_blocking) + ")")
       ->capture_default_str();
+  s->add_option("--weights", c.solve.solver.weights,
+                "file|multiplicative:NF|none: ML weights 1/sigma^2 (auto: file when the network has sigmas; " +
+                    honoured_by(&Info::measurement_model) + ")")
+      ->capture_default_str();
+  s->add_option("--loss", c.solve.solver.loss, "l2|huber:DELTA (" + honoured_by(&Info::measurement_model) + ")")
+      ->capture_default_str();
   s->add_option("--json", c.solve.json, "write a JSON summary");
   s->add_option("--checkpoint", c.solve.checkpoint, "write checkpoints to this file (atomically replaced)");
   s->add_option("--checkpoint-every", c.solve.checkpoint_every, "checkpoint every K iterations");
@@ -121,6 +132,9 @@ void add_eval(CLI::App& app, Commands& c) {
       ->check(CLI::IsMember({"auto", "truth", "estimate"}))
       ->capture_default_str();
   e->add_flag("--no-covariance", c.eval.no_covariance, "--crlb: leave the result file unchanged");
+  e->add_option("--weights", c.eval.weights, "file|multiplicative:NF|none: weights of the ML cost (as snl solve)")
+      ->capture_default_str();
+  e->add_option("--loss", c.eval.loss, "l2|huber:DELTA: loss of the ML cost (as snl solve)")->capture_default_str();
   e->add_option("--json", c.eval.json, "write a JSON summary");
 }
 

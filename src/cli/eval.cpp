@@ -41,6 +41,7 @@ void evaluate_result(const EvalCommand& cmd, Network& slab, MPI_Comm comm, Evalu
   std::vector<double> x = prob->file_rows_to_owned(xr, row0, prob->dim());
   x.resize(std::size_t(prob->num_local()) * prob->dim());
   prob->graph().halo().exchange(x.data(), prob->dim());
+  prob->set_measurement_model(parse_weights_spec(cmd.weights), parse_loss_spec(cmd.loss));  // same on every rank
   ev.costs = evaluate_costs(*prob, x.data());
   ev.errors = evaluate_errors(*prob, x.data());
   ev.num_sensors = prob->num_sensors();

@@ -5,6 +5,7 @@
 #include "snl/cli/commands.hpp"
 #include "snl/io/network.hpp"
 #include "snl/problem/analysis.hpp"
+#include "snl/problem/noise.hpp"
 
 namespace snl {
 
@@ -14,6 +15,8 @@ using detail::is_root;
 void run_generate(const GenerateCommand& cmd, MPI_Comm comm) {
   const std::string bad = cmd.options.validate();
   if (!bad.empty()) throw Error(bad);
+  const std::string bad_noise = cmd.noise.validate();
+  if (!bad_noise.empty()) throw Error(bad_noise);
   check_output_path(cmd.output, comm);
   std::string summary, warning;
   collective_try(comm, [&] {
@@ -21,6 +24,7 @@ void run_generate(const GenerateCommand& cmd, MPI_Comm comm) {
     const double t0 = MPI_Wtime();
     GenerateReport rep;
     Network net = generate_network(cmd.options, &rep);
+    if (cmd.noise.changes_network()) apply_noise_model(net, cmd.noise, cmd.options.sigma, rep.draw_seed);
     const double t1 = MPI_Wtime();
     write_network(cmd.output, net);
     const double t2 = MPI_Wtime();

@@ -596,6 +596,18 @@ LocalId DistGraph::owned_local(GlobalId g) const {
   return (it != owned_sorted_.end() && it->first == g) ? it->second : -1;
 }
 
+std::vector<double> DistGraph::take_last_edge_column() {
+  const std::size_t slots = width_ > 0 ? edge_values_.size() / width_ : 0;
+  std::vector<double> last(slots), rest(slots * (width_ - 1));
+  for (std::size_t e = 0; e < slots; ++e) {
+    for (int c = 0; c + 1 < width_; ++c) rest[e * (width_ - 1) + c] = edge_values_[e * width_ + c];
+    last[e] = edge_values_[e * width_ + width_ - 1];
+  }
+  edge_values_.swap(rest);
+  --width_;
+  return last;
+}
+
 LocalId DistGraph::max_degree() const {
   LocalId d = 0;
   for (LocalId v = 0; v < n_owned_; ++v) d = std::max(d, degree(v));

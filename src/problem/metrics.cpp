@@ -49,8 +49,45 @@ inline void add_ml_residual(const double* z, double rho, double* g) {
   }
 }
 
+// The weighted / Huber term w_e rho'(r)/r e(z) of either gradient (weights.hpp):
+// r = |z| - rho for the ML term, the distance to the disk for the relaxed one.
+template <int P, bool kRelaxed>
+inline void add_model_residual(const double* z, double rho, double w, double delta, double* g) {
+  const double nz = norm<P>(z);
+  if (!(nz > 0) || (kRelaxed && !(nz > rho))) return;
+  const double c = w * huber_factor(delta, std::abs(nz - rho)) * (1.0 - rho / nz);
+  for (int k = 0; k < P; ++k) g[k] += c * z[k];
+}
+
+template <int P, bool kRelaxed>
+void model_gradient_impl(const LocalizationProblem& prob, const double* x, double* g, LocalId begin, LocalId end) {
+  const auto& gr = prob.graph();
+  const auto& off = gr.offsets();
+  const auto& adj = gr.adjacency();
+  const auto& ev = gr.edge_values();
+  const auto& aoff = prob.anchor_offsets();
+  const auto& aid = prob.anchor_ids();
+  const auto& ar = prob.anchor_ranges();
+  const double* anc = prob.anchors().data();
+  const MeasurementModel& mo = prob.model();
+  for (LocalId v = begin; v < end; ++v) {
+    double acc[P] = {}, z[P];
+    const double* xv = x + std::size_t(v) * P;
+    for (auto e = off[v]; e < off[v + 1]; ++e) {
+      for (int c = 0; c < P; ++c) z[c] = xv[c] - x[std::size_t(adj[e]) * P + c];
+      add_model_residual<P, kRelaxed>(z, ev[e], mo.edge_weight(e), mo.huber_delta, acc);
+    }
+    for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
+      for (int c = 0; c < P; ++c) z[c] = xv[c] - anc[std::size_t(aid[e]) * P + c];
+      add_model_residual<P, kRelaxed>(z, ar[e], mo.anchor_weight(e), mo.huber_delta, acc);
+    }
+    for (int c = 0; c < P; ++c) g[std::size_t(v) * P + c] = acc[c];
+  }
+}
+
 template <int P, bool kRelaxed>
 void gradient_impl(const LocalizationProblem& prob, const double* x, double* g, LocalId begin, LocalId end) {
+  if (prob.model().active()) return model_gradient_impl<P, kRelaxed>(prob, x, g, begin, end);
   const auto& gr = prob.graph();
   const auto& off = gr.offsets();
   const auto& adj = gr.adjacency();
@@ -96,15 +133,18 @@ CostTerms costs_impl(const LocalizationProblem& prob, const double* x) {
   const double* anc = prob.anchors().data();
   // Exact sums of the per-edge terms: the same costs for any partition.
   detail::ExactSum t[4];  // ml, relaxed, certificate, apriori
-  auto term = [&](const double* z, double rho) {
+  const MeasurementModel& mo = prob.model();
+  // Weighted / Huber terms w rho(r) (weights.hpp); with the unweighted l2
+  // model the expressions below, as they always were.
+  auto term = [&](const double* z, double rho, double w) {
     const double nz = norm<P>(z);
-    const double ml = 0.5 * (nz - rho) * (nz - rho);
+    const double ml = mo.active() ? w * loss_value(mo.huber_delta, std::abs(nz - rho)) : 0.5 * (nz - rho) * (nz - rho);
     t[0].add(ml);
     if (nz > rho)
       t[1].add(ml);  // d_B(rho)(z)^2 / 2 = (|z| - rho)^2 / 2 outside the ball
     else
       t[2].add(ml);  // relaxed term is zero: eq. (22) collects the nonconvex one
-    t[3].add(0.5 * rho * rho);
+    t[3].add(mo.active() ? w * loss_value(mo.huber_delta, rho) : 0.5 * rho * rho);
   };
   for (LocalId v = 0; v < gr.num_owned(); ++v) {
     const double* xv = x + std::size_t(v) * P;
@@ -114,13 +154,13 @@ CostTerms costs_impl(const LocalizationProblem& prob, const double* x) {
       const double* xu = x + std::size_t(adj[e]) * P;
       double z[P];
       for (int c = 0; c < P; ++c) z[c] = xv[c] - xu[c];
-      term(z, ev[e]);
+      term(z, ev[e], mo.edge_weight(e));
     }
     for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
       const double* a = anc + std::size_t(aid[e]) * P;
       double z[P];
       for (int c = 0; c < P; ++c) z[c] = xv[c] - a[c];
-      term(z, ar[e]);
+      term(z, ar[e], mo.anchor_weight(e));
     }
   }
   detail::allreduce_exact(t, 4, prob.comm());
@@ -148,6 +188,10 @@ void ml_gradient(const LocalizationProblem& prob, const double* x, double* g, Lo
 }
 
 double relaxation_lipschitz(const LocalizationProblem& prob) {
+  // Weighted (weights.hpp): Gershgorin on the weighted Laplacian plus the
+  // anchor diagonal, 2 max_i sum_j w_ij + max_i sum_k w_ik; Huber leaves it
+  // (rho(dist_B) has a 1-Lipschitz gradient, docs/quality.md).
+  if (prob.model().weighted) return 2.0 * prob.model().max_weight_sum + prob.model().max_anchor_weight_sum;
   return 2.0 * prob.max_degree() + prob.max_anchor_degree();
 }
 

@@ -11,13 +11,14 @@ namespace snl {
 
 namespace {
 
+// A measurement with its sigma (0 where the file has none).
 struct SensorEdgeRec {
   GlobalId i, j;
-  double r;
+  double r, s;
 };
 struct AnchorEdgeRec {
   GlobalId i, k;
-  double r;
+  double r, s;
 };
 
 // Union-find with path halving, for the connectivity report on rank 0.
@@ -58,11 +59,21 @@ class SetupClock {
   double mark_;
 };
 
-// The measurements after step 1: flat (i, j) / (i, k) pairs with their ranges.
+// The measurements after step 1: flat (i, j) / (i, k) pairs with their ranges
+// and, where the file has them (on any rank), their sigmas.
 struct Measurements {
   std::vector<GlobalId> sedges, aedges;
   std::vector<double> sranges, aranges;
+  bool has_ssigmas = false, has_asigmas = false;
+  std::vector<double> ssigmas, asigmas;
 };
+
+// Whether some rank's slab holds the dataset (a rank may hold no rows of it).
+bool any_rank(MPI_Comm comm, bool mine) {
+  int in = mine ? 1 : 0, out = 0;
+  MPI_Allreduce(&in, &out, 1, MPI_INT, MPI_MAX, comm);
+  return out != 0;
+}
 
 // Step 1: merge duplicates. Every measurement goes to the block owner of its
 // smaller sensor id, where all copies of a pair meet; rep gets the counts.
@@ -70,11 +81,14 @@ Measurements merge_measurements(MPI_Comm comm, const Network& slab, ProblemRepor
   const int size = comm_size(comm);
   const GlobalId n = slab.num_sensors;
   Measurements m;
+  m.has_ssigmas = any_rank(comm, !slab.sensor_sigmas.empty());
+  m.has_asigmas = any_rank(comm, !slab.anchor_sigmas.empty());
   std::vector<std::vector<SensorEdgeRec>> out(size);
   for (GlobalId e = 0; e < slab.local_sensor_edges(); ++e) {
     GlobalId a = slab.sensor_edges[2 * e], b = slab.sensor_edges[2 * e + 1];
     if (a > b) std::swap(a, b);
-    out[block_owner(n, size, a)].push_back({a, b, slab.sensor_ranges[e]});
+    const double sg = slab.sensor_sigmas.empty() ? 0.0 : slab.sensor_sigmas[e];
+    out[block_owner(n, size, a)].push_back({a, b, slab.sensor_ranges[e], sg});
   }
   auto got = exchange_records(comm, out);
   test_fail_point("alloc");  // fault-injection tests: one rank runs out of memory between collectives
@@ -84,11 +98,13 @@ Measurements merge_measurements(MPI_Comm comm, const Network& slab, ProblemRepor
     m.sedges.push_back(r.i);
     m.sedges.push_back(r.j);
     m.sranges.push_back(r.r);
+    if (m.has_ssigmas) m.ssigmas.push_back(r.s);
   }
   std::vector<std::vector<AnchorEdgeRec>> aout(size);
   for (GlobalId e = 0; e < slab.local_anchor_edges(); ++e) {
     const GlobalId i = slab.anchor_edges[2 * e];
-    aout[block_owner(n, size, i)].push_back({i, slab.anchor_edges[2 * e + 1], slab.anchor_ranges[e]});
+    const double sg = slab.anchor_sigmas.empty() ? 0.0 : slab.anchor_sigmas[e];
+    aout[block_owner(n, size, i)].push_back({i, slab.anchor_edges[2 * e + 1], slab.anchor_ranges[e], sg});
   }
   auto agot = exchange_records(comm, aout);
   m.aedges.reserve(2 * agot.size());
@@ -97,8 +113,12 @@ Measurements merge_measurements(MPI_Comm comm, const Network& slab, ProblemRepor
     m.aedges.push_back(r.i);
     m.aedges.push_back(r.k);
     m.aranges.push_back(r.r);
+    if (m.has_asigmas) m.asigmas.push_back(r.s);
   }
-  MergeStats local = merge_duplicates(m.sedges, m.sranges, m.aedges, m.aranges);
+  MeasurementExtras sx, ax;  // sigmas merge by inverse-variance weighting
+  if (m.has_ssigmas) sx.sigmas = &m.ssigmas;
+  if (m.has_asigmas) ax.sigmas = &m.asigmas;
+  MergeStats local = merge_duplicates(m.sedges, m.sranges, sx, m.aedges, m.aranges, ax);
   long long in[4] = {local.merged_sensor_pairs, local.merged_anchor_pairs, static_cast<long long>(m.sranges.size()),
                      static_cast<long long>(m.aranges.size())},
             sum[4];
@@ -178,7 +198,18 @@ void LocalizationProblem::build(MPI_Comm comm, const Network& slab, PartitionMet
   const std::vector<int> owner = partition_graph(comm, n, m.sedges, method, &rep.partition);
   clock.done("partition");
   for (const auto& ph : rep.partition.phases) rep.setup_phases.emplace_back("partition." + ph.first, ph.second);
-  graph_ = DistGraph(comm, n, owner, m.sedges, m.sranges, 1, std::max(dim_, 2));
+  if (m.has_ssigmas) {  // sigmas ride along as a second column, then move to their own array
+    std::vector<double> vals(2 * m.sranges.size());
+    for (std::size_t e = 0; e < m.sranges.size(); ++e) {
+      vals[2 * e] = m.sranges[e];
+      vals[2 * e + 1] = m.ssigmas[e];
+    }
+    graph_ = DistGraph(comm, n, owner, m.sedges, vals, 2, std::max(dim_, 2));
+    sensor_sigmas_ = graph_.take_last_edge_column();
+    has_sensor_sigmas_ = true;
+  } else {
+    graph_ = DistGraph(comm, n, owner, m.sedges, m.sranges, 1, std::max(dim_, 2));
+  }
   clock.done("graph");
   for (const auto& ph : graph_.build_phases()) rep.setup_phases.emplace_back("graph." + ph.first, ph.second);
   m.sedges.clear();
@@ -186,7 +217,8 @@ void LocalizationProblem::build(MPI_Comm comm, const Network& slab, PartitionMet
   m.sranges.clear();
   m.sranges.shrink_to_fit();
   count_ghosts(comm, graph_, rep.partition);
-  distribute_anchors(comm, owner, m.aedges, m.aranges);
+  has_anchor_sigmas_ = m.has_asigmas;
+  distribute_anchors(comm, owner, m.aedges, m.aranges, m.asigmas);
   read_owned_rows(comm, slab);
   flag_sensors(comm, unanchored, rep);
   delta_max_ = graph_.max_degree();
@@ -197,11 +229,13 @@ void LocalizationProblem::build(MPI_Comm comm, const Network& slab, PartitionMet
 // Step 4: anchor measurements to the owners of their sensors, sorted by
 // (local sensor, anchor id).
 void LocalizationProblem::distribute_anchors(MPI_Comm comm, const std::vector<int>& owner,
-                                             const std::vector<GlobalId>& aedges, const std::vector<double>& aranges) {
+                                             const std::vector<GlobalId>& aedges, const std::vector<double>& aranges,
+                                             const std::vector<double>& asigmas) {
   const LocalId n_owned = graph_.num_owned();
   std::vector<std::vector<AnchorEdgeRec>> out(comm_size(comm));
   for (std::size_t e = 0; 2 * e < aedges.size(); ++e)
-    out[owner[aedges[2 * e]]].push_back({aedges[2 * e], aedges[2 * e + 1], aranges[e]});
+    out[owner[aedges[2 * e]]].push_back(
+        {aedges[2 * e], aedges[2 * e + 1], aranges[e], asigmas.empty() ? 0.0 : asigmas[e]});
   auto got = exchange_records(comm, out);
   std::vector<std::pair<LocalId, std::size_t>> keyed(got.size());
   for (std::size_t t = 0; t < got.size(); ++t) keyed[t] = {graph_.owned_local(got[t].i), t};
@@ -211,11 +245,13 @@ void LocalizationProblem::distribute_anchors(MPI_Comm comm, const std::vector<in
   anchor_offsets_.assign(static_cast<std::size_t>(n_owned) + 1, 0);
   anchor_ids_.resize(got.size());
   anchor_ranges_.resize(got.size());
+  if (has_anchor_sigmas_) anchor_sigmas_.resize(got.size());
   for (std::size_t t = 0; t < keyed.size(); ++t) {
     const auto& r = got[keyed[t].second];
     ++anchor_offsets_[keyed[t].first + 1];
     anchor_ids_[t] = static_cast<std::int32_t>(r.k);
     anchor_ranges_[t] = r.r;
+    if (has_anchor_sigmas_) anchor_sigmas_[t] = r.s;
   }
   for (LocalId v = 0; v < n_owned; ++v) anchor_offsets_[v + 1] += anchor_offsets_[v];
 }
@@ -269,7 +305,10 @@ std::int64_t LocalizationProblem::memory_bytes() const {
                                    anchor_offsets_.capacity() * sizeof(std::int64_t) +
                                    anchor_ids_.capacity() * sizeof(std::int32_t) +
                                    anchor_ranges_.capacity() * sizeof(double) + truth_.capacity() * sizeof(double) +
-                                   flags_.capacity());
+                                   flags_.capacity() + sensor_sigmas_.capacity() * sizeof(double) +
+                                   anchor_sigmas_.capacity() * sizeof(double) +
+                                   model_.edge_weights.capacity() * sizeof(double) +
+                                   model_.anchor_weights.capacity() * sizeof(double));
 }
 
 std::vector<double> LocalizationProblem::file_rows_to_owned(const std::vector<double>& rows, GlobalId row_offset,

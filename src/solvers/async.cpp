@@ -31,20 +31,29 @@ double local_cost_grad(const LocalizationProblem& prob, const double* x, LocalId
   const auto& gr = prob.graph();
   double f = 0;
   for (int k = 0; k < p; ++k) g[k] = 0;
-  auto term = [&](const double* c, double rho) {
+  // Weighted / Huber terms w rho(t), t = |z| - rho outside the disk (weights.hpp);
+  // the unweighted l2 model takes the plain expressions.
+  const MeasurementModel& mo = prob.model();
+  auto term = [&](const double* c, double rho, double w) {
     double s = 0;
     for (int k = 0; k < p; ++k) s += (v[k] - c[k]) * (v[k] - c[k]);
     const double nz = std::sqrt(s);
     if (nz > rho) {
-      f += 0.5 * (nz - rho) * (nz - rho);
-      const double a = 1.0 - rho / nz;
+      if (!mo.active()) {
+        f += 0.5 * (nz - rho) * (nz - rho);
+        const double a = 1.0 - rho / nz;
+        for (int k = 0; k < p; ++k) g[k] += a * (v[k] - c[k]);
+        return;
+      }
+      f += w * loss_value(mo.huber_delta, nz - rho);
+      const double a = w * huber_factor(mo.huber_delta, nz - rho) * (1.0 - rho / nz);
       for (int k = 0; k < p; ++k) g[k] += a * (v[k] - c[k]);
     }
   };
   for (auto e = gr.offsets()[i]; e < gr.offsets()[i + 1]; ++e)
-    term(x + std::size_t(gr.adjacency()[e]) * p, gr.edge_value(e));
+    term(x + std::size_t(gr.adjacency()[e]) * p, gr.edge_value(e), mo.edge_weight(e));
   for (auto e = prob.anchor_offsets()[i]; e < prob.anchor_offsets()[i + 1]; ++e)
-    term(prob.anchors().data() + std::size_t(prob.anchor_ids()[e]) * p, prob.anchor_ranges()[e]);
+    term(prob.anchors().data() + std::size_t(prob.anchor_ids()[e]) * p, prob.anchor_ranges()[e], mo.anchor_weight(e));
   return f;
 }
 
@@ -144,6 +153,17 @@ class Async final : public Algorithm {
     return (it != lookup_.end() && it->first == g) ? it->second : -1;
   }
 
+  // L_i = delta_i + |A_i|; weighted: sum_j w_ij + sum_k w_ik (Huber keeps it).
+  double local_lipschitz(LocalId i) const {
+    const auto ab = prob_.anchor_offsets()[i], ae = prob_.anchor_offsets()[i + 1];
+    const MeasurementModel& mo = prob_.model();
+    if (!mo.weighted) return prob_.graph().degree(i) + double(ae - ab);
+    double s = 0;
+    for (auto e = prob_.graph().offsets()[i]; e < prob_.graph().offsets()[i + 1]; ++e) s += mo.edge_weight(e);
+    for (auto e = ab; e < ae; ++e) s += mo.anchor_weight(e);
+    return s;
+  }
+
   void activate(LocalId i) {
     const int p = prob_.dim();
     double* xi = &x_[std::size_t(i) * p];
@@ -155,7 +175,7 @@ class Async final : public Algorithm {
       return;
     }
     // Algorithm 3 on f_i with L_i = delta_i + |A_i|, warm-started at x_i.
-    const double Li = prob_.graph().degree(i) + double(prob_.anchor_offsets()[i + 1] - prob_.anchor_offsets()[i]);
+    const double Li = local_lipschitz(i);
     if (Li == 0) return;
     double z[3], zm[3], w[3];
     for (int k = 0; k < p; ++k) z[k] = zm[k] = xi[k];

@@ -331,6 +331,8 @@ std::string checkpoint_options(const SolverOptions& opt) {
   // Only when they matter, so that earlier checkpoints still match.
   if (opt.temporal_block != 1) os << "|temporal_block=" << opt.temporal_block;
   if (seed_drives_iterates(opt.algorithm)) os << "|seed=" << opt.seed;
+  if (opt.weights != "auto") os << "|weights=" << opt.weights;
+  if (opt.loss != "l2") os << "|loss=" << opt.loss;
   return os.str();
 }
 

@@ -13,5 +13,9 @@ std::unique_ptr<Algorithm> make_bb(LocalizationProblem& prob, const SolverOption
 std::unique_ptr<Algorithm> make_pm(LocalizationProblem& prob, const SolverOptions& opt);          // pm.cpp
 std::unique_ptr<Algorithm> make_async(LocalizationProblem& prob, const SolverOptions& opt);       // async.cpp
 std::unique_ptr<Algorithm> make_async_exact(LocalizationProblem& prob, const SolverOptions& opt); // async.cpp
+/// The relaxation and MM under a weighted or Huber model (weighted.cpp); make_relaxation
+/// and make_mm return these when prob.model().active().
+std::unique_ptr<Algorithm> make_model_relaxation(LocalizationProblem& prob);
+std::unique_ptr<Algorithm> make_model_mm(LocalizationProblem& prob);
 
 }  // namespace snl::detail

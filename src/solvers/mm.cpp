@@ -196,6 +196,7 @@ class MM final : public Algorithm {
 namespace detail {
 
 std::unique_ptr<Algorithm> make_mm(LocalizationProblem& prob, const SolverOptions& opt) {
+  if (prob.model().active()) return make_model_mm(prob);  // weights or Huber: weighted.cpp
   return std::make_unique<MM>(prob, opt.temporal_block);
 }
 

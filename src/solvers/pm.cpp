@@ -29,6 +29,21 @@ inline void add_ball_projection(const double* z, const double* c, double rho, in
   for (int k = 0; k < p; ++k) acc[k] += c[k] + f * (z[k] - c[k]);
 }
 
+// Weighted / Huber model (weights.hpp): x_i <- sum_e a_e P_e(x_i) / sum_e a_e
+// with a_e = w_e rho'(t_e)/t_e, t_e the distance of x_i to the disk: one
+// gradient step of size 1/sum_e a_e on the quadratic majorizer of node i's
+// terms at x_i, so each block step still decreases f_hat (unweighted l2: the mean).
+inline void add_weighted_projection(const double* z, const double* c, double rho, double w, double delta, int p,
+                                    double* acc, double* wsum) {
+  double s = 0;
+  for (int k = 0; k < p; ++k) s += (z[k] - c[k]) * (z[k] - c[k]);
+  const double nz = std::sqrt(s);
+  const double f = nz > rho ? rho / nz : 1.0;
+  const double a = w * huber_factor(delta, nz > rho ? nz - rho : 0.0);
+  for (int k = 0; k < p; ++k) acc[k] += a * (c[k] + f * (z[k] - c[k]));
+  *wsum += a;
+}
+
 }  // namespace
 
 std::vector<int> jones_plassmann_coloring(DistGraph& g) {
@@ -109,6 +124,10 @@ class ProjectionMethod final : public Algorithm {
         if (deg == 0) continue;
         double acc[3] = {0, 0, 0};
         const double* xi = &x_[std::size_t(i) * p];
+        if (prob_.model().active()) {
+          weighted_step(i, xi, acc);
+          continue;
+        }
         for (auto e = g.offsets()[i]; e < g.offsets()[i + 1]; ++e)
           add_ball_projection(xi, &x_[std::size_t(g.adjacency()[e]) * p], g.edge_value(e), p, acc);
         for (auto e = prob_.anchor_offsets()[i]; e < prob_.anchor_offsets()[i + 1]; ++e)
@@ -119,6 +138,21 @@ class ProjectionMethod final : public Algorithm {
       g.halo().exchange(x_.data(), p);  // the next colour sees this one's values
     }
     diff_norms(prob_, x_.data(), prev_.data(), &diff_sq_, &x_sq_);
+  }
+
+  // The weighted average of the projections (add_weighted_projection) into row i.
+  void weighted_step(LocalId i, const double* xi, double* acc) {
+    const int p = prob_.dim();
+    const auto& g = prob_.graph();
+    const MeasurementModel& mo = prob_.model();
+    double wsum = 0;
+    for (auto e = g.offsets()[i]; e < g.offsets()[i + 1]; ++e)
+      add_weighted_projection(xi, &x_[std::size_t(g.adjacency()[e]) * p], g.edge_value(e), mo.edge_weight(e),
+                              mo.huber_delta, p, acc, &wsum);
+    for (auto e = prob_.anchor_offsets()[i]; e < prob_.anchor_offsets()[i + 1]; ++e)
+      add_weighted_projection(xi, &prob_.anchors()[std::size_t(prob_.anchor_ids()[e]) * p], prob_.anchor_ranges()[e],
+                              mo.anchor_weight(e), mo.huber_delta, p, acc, &wsum);
+    for (int k = 0; k < p; ++k) x_[std::size_t(i) * p + k] = acc[k] / wsum;
   }
 
   const std::vector<double>& positions() const override { return x_; }

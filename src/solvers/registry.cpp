@@ -11,24 +11,26 @@ using A = AlgorithmId;
 
 // Capabilities, as the code has them: --temporal-block is honoured where
 // Algorithm::max_levels() > 1 (relaxation, MM); --grad-tol where grad_norm_sq()
-// is finite (relaxation, BB); --bb-rounds by BB alone.
+// is finite (relaxation, BB); --bb-rounds by BB alone; --weights/--loss where
+// the method reads prob.model() (all of these; a pipeline only if all its phases do).
 const std::vector<AlgorithmInfo> kRegistry = {
     // id             name           code  factory                   phases
     //   synchronous temporal_blocking gradient_stop consensus_rounds monotone_surrogate gap_certificate
+    //   measurement_model
     {A::kRelaxation, "relaxation", 0, detail::make_relaxation, {A::kRelaxation},
-     true, true, true, false, false, true},
+     true, true, true, false, false, true, true},
     {A::kMM, "mm", 1, detail::make_mm, {A::kMM},
-     true, true, false, false, true, false},
+     true, true, false, false, true, false, true},
     {A::kPipeline, "pipeline", -1, nullptr, {A::kRelaxation, A::kMM},
-     true, true, true, false, true, true},
+     true, true, true, false, true, true, true},
     {A::kBB, "bb", 2, detail::make_bb, {A::kBB},
-     true, false, true, true, false, false},
+     true, false, true, true, false, false, true},
     {A::kPM, "pm", 3, detail::make_pm, {A::kPM},
-     false, false, false, false, false, false},
+     false, false, false, false, false, false, true},
     {A::kAsync, "async", 4, detail::make_async, {A::kAsync},
-     false, false, false, false, false, false},
+     false, false, false, false, false, false, true},
     {A::kAsyncExact, "async-exact", 5, detail::make_async_exact, {A::kAsyncExact},
-     false, false, false, false, false, false},
+     false, false, false, false, false, false, true},
 };
 
 }  // namespace

@@ -150,6 +150,7 @@ class Relaxation final : public Algorithm {
 namespace detail {
 
 std::unique_ptr<Algorithm> make_relaxation(LocalizationProblem& prob, const SolverOptions& opt) {
+  if (prob.model().active()) return make_model_relaxation(prob);  // weights or Huber: weighted.cpp
   return std::make_unique<Relaxation>(prob, opt.temporal_block);
 }
 

@@ -31,8 +31,25 @@ std::string SolverOptions::validate() const {
   if (history_every < 0) return "--history-every must be >= 0";
   if (bb_rounds < 1 || bb_rounds > 10000) return "--bb-rounds must be in [1, 10000]";
   if (temporal_block < 1 || temporal_block > 64) return "--temporal-block must be in [1, 64]";
+  try {
+    parse_weights_spec(weights);
+    parse_loss_spec(loss);
+  } catch (const Error& e) {
+    return e.what();
+  }
   return unsupported_option();
 }
+
+namespace {
+// A method honours --weights/--loss when it and every phase it runs do (a
+// pipeline whose refinement ignores the model must not claim it).
+bool honours_model(const AlgorithmInfo& a) {
+  if (!a.measurement_model) return false;
+  for (AlgorithmId id : a.phases)
+    if (!algorithm_info(id).measurement_model) return false;
+  return true;
+}
+}  // namespace
 
 std::string SolverOptions::unsupported_option() const {
   const AlgorithmInfo* a = find_algorithm(algorithm);
@@ -48,9 +65,11 @@ std::string SolverOptions::unsupported_option() const {
       {grad_tol != defaults.grad_tol, "--grad-tol", &AlgorithmInfo::gradient_stop, "0"},
       {temporal_block != defaults.temporal_block, "--temporal-block", &AlgorithmInfo::temporal_blocking, "1"},
       {bb_rounds != defaults.bb_rounds, "--bb-rounds", &AlgorithmInfo::consensus_rounds, "20"},
+      {weights != defaults.weights && weights != "none", "--weights", &AlgorithmInfo::measurement_model, "none"},
+      {loss != defaults.loss, "--loss", &AlgorithmInfo::measurement_model, "l2"},
   };
   for (const auto& c : checks)
-    if (c.set && !(a->*c.capability))
+    if (c.set && !(c.capability == &AlgorithmInfo::measurement_model ? honours_model(*a) : a->*c.capability))
       return std::string(c.option) + " is not honoured by --algorithm " + algorithm + " (only by " +
              algorithms_with(c.capability) + "); leave it out or give its default " + c.default_value;
   return "";
@@ -74,6 +93,11 @@ std::string Summary::brief_report() const {
 Solver::Solver(LocalizationProblem& prob, SolverOptions opt) : prob_(prob), opt_(std::move(opt)) {
   const std::string err = opt_.validate();
   if (!err.empty()) throw Error(err);
+  // The measurement model every phase and cost uses; --weights auto means
+  // none for a method that cannot honour weights (explicit values are refused).
+  WeightsSpec ws = parse_weights_spec(opt_.weights);
+  if (!honours_model(*find_algorithm(opt_.algorithm))) ws.kind = WeightsSpec::Kind::kNone;
+  prob_.set_measurement_model(ws, parse_loss_spec(opt_.loss));
 }
 
 std::string Solver::options_fingerprint() const { return checkpoint_options(opt_); }

@@ -301,3 +301,155 @@ std::vector<double> async(const Network& net, const std::vector<double>& x0, lon
 }
 
 }  // namespace snl::reference
+
+// ---- the weighted / Huber model, written from the formulas (edge lists) ----
+namespace snl::reference {
+
+namespace {
+double huber(double d, double r) { return d > 0 && r > d ? d * r - 0.5 * d * d : 0.5 * r * r; }
+double omega(double d, double r) { return d > 0 && r > d ? d / r : 1.0; }
+// Per sensor: cs * sum_j w_ij + ca * sum_k w_ik (the diagonal majorizer D).
+std::vector<double> diag_majorizer(const Network& net, const Model& m, double cs, double ca) {
+  std::vector<double> D(net.num_sensors, 0.0);
+  for (std::size_t e = 0; e < net.sensor_ranges.size(); ++e) {
+    D[net.sensor_edges[2 * e]] += cs * m.sensor_w[e];
+    D[net.sensor_edges[2 * e + 1]] += cs * m.sensor_w[e];
+  }
+  for (std::size_t e = 0; e < net.anchor_ranges.size(); ++e) D[net.anchor_edges[2 * e]] += ca * m.anchor_w[e];
+  return D;
+}
+}  // namespace
+
+Model model_from_sigmas(const Network& net, double delta) {
+  Model m;
+  m.delta = delta;
+  m.sensor_w.assign(net.sensor_ranges.size(), 1.0);
+  m.anchor_w.assign(net.anchor_ranges.size(), 1.0);
+  double smin = INFINITY;
+  for (double s : net.sensor_sigmas) smin = std::min(smin, s);
+  for (double s : net.anchor_sigmas) smin = std::min(smin, s);
+  for (std::size_t e = 0; e < net.sensor_sigmas.size(); ++e) m.sensor_w[e] = std::pow(smin / net.sensor_sigmas[e], 2);
+  for (std::size_t e = 0; e < net.anchor_sigmas.size(); ++e) m.anchor_w[e] = std::pow(smin / net.anchor_sigmas[e], 2);
+  return m;
+}
+
+// Calls f(i, c, rho, w, anchor?) for each measurement: c is x_j or a_k.
+template <class F>
+void each_measurement(const Network& net, const Model& m, const std::vector<double>& x, F&& f) {
+  const int p = net.dim;
+  for (std::size_t e = 0; e < net.sensor_ranges.size(); ++e)
+    f(net.sensor_edges[2 * e], net.sensor_edges[2 * e + 1], &x[net.sensor_edges[2 * e + 1] * p], net.sensor_ranges[e],
+      m.sensor_w[e]);
+  for (std::size_t e = 0; e < net.anchor_ranges.size(); ++e)
+    f(net.anchor_edges[2 * e], GlobalId(-1), &net.anchors[net.anchor_edges[2 * e + 1] * p], net.anchor_ranges[e],
+      m.anchor_w[e]);
+}
+
+double model_ml_cost(const Network& net, const Model& m, const std::vector<double>& x) {
+  double f = 0;
+  each_measurement(net, m, x, [&](GlobalId i, GlobalId, const double* c, double rho, double w) {
+    f += w * huber(m.delta, std::abs(dist(&x[i * net.dim], c, net.dim) - rho));
+  });
+  return f;
+}
+
+double model_relaxed_cost(const Network& net, const Model& m, const std::vector<double>& x) {
+  double f = 0;
+  each_measurement(net, m, x, [&](GlobalId i, GlobalId, const double* c, double rho, double w) {
+    f += w * huber(m.delta, std::max(0.0, dist(&x[i * net.dim], c, net.dim) - rho));
+  });
+  return f;
+}
+
+std::vector<double> model_relaxed_gradient(const Network& net, const Model& m, const std::vector<double>& x) {
+  const int p = net.dim;
+  std::vector<double> g(x.size(), 0.0);
+  each_measurement(net, m, x, [&](GlobalId i, GlobalId j, const double* c, double rho, double w) {
+    const double d = dist(&x[i * p], c, p);
+    if (d <= rho) return;
+    const double k = w * omega(m.delta, d - rho) * (1 - rho / d);
+    for (int q = 0; q < p; ++q) {
+      g[i * p + q] += k * (x[i * p + q] - c[q]);
+      if (j >= 0) g[j * p + q] -= k * (x[i * p + q] - c[q]);
+    }
+  });
+  return g;
+}
+
+std::vector<double> model_nesterov(const Network& net, const Model& m, const std::vector<double>& x0, int iters) {
+  const auto D = diag_majorizer(net, m, 2.0, 1.0);
+  std::vector<double> x = x0, xm = x0, w(x0.size());
+  for (int k = 1; k <= iters; ++k) {
+    for (std::size_t t = 0; t < x.size(); ++t) w[t] = x[t] + (double(k) - 2) / (double(k) + 1) * (x[t] - xm[t]);
+    const auto g = model_relaxed_gradient(net, m, w);
+    xm = x;
+    for (std::size_t t = 0; t < x.size(); ++t) x[t] = w[t] - g[t] / D[t / net.dim];
+  }
+  return x;
+}
+
+std::vector<double> model_mm(const Network& net, const Model& m, const std::vector<double>& x0, int iters,
+                             std::vector<double>* phi) {
+  const int p = net.dim;
+  const auto D = diag_majorizer(net, m, 3.0, 2.0);
+  const std::size_t E = net.sensor_ranges.size(), Ea = net.anchor_ranges.size();
+  // Every measurement as (i, j or -1, anchor row, range, weight), j > i for sensor pairs.
+  std::vector<GlobalId> ei(E + Ea), ej(E + Ea);
+  std::vector<double> rho(E + Ea), wt(E + Ea);
+  for (std::size_t e = 0; e < E; ++e) {
+    ei[e] = std::min(net.sensor_edges[2 * e], net.sensor_edges[2 * e + 1]);
+    ej[e] = std::max(net.sensor_edges[2 * e], net.sensor_edges[2 * e + 1]);
+    rho[e] = net.sensor_ranges[e];
+    wt[e] = m.sensor_w[e];
+  }
+  for (std::size_t e = 0; e < Ea; ++e) {
+    ei[E + e] = net.anchor_edges[2 * e];
+    ej[E + e] = -1 - net.anchor_edges[2 * e + 1];  // anchor k as -1 - k
+    rho[E + e] = net.anchor_ranges[e];
+    wt[E + e] = m.anchor_w[e];
+  }
+  std::vector<double> x = x0, y((E + Ea) * p);
+  auto dz = [&](std::size_t e, double* out) {
+    const double* c = ej[e] >= 0 ? &x[ej[e] * p] : &net.anchors[(-1 - ej[e]) * p];
+    for (int q = 0; q < p; ++q) out[q] = x[ei[e] * p + q] - c[q];
+  };
+  for (std::size_t e = 0; e < E + Ea; ++e) {
+    dz(e, &y[e * p]);
+    sphere(rho[e], &y[e * p], p);
+  }
+  auto Phi = [&]() {
+    double s = 0, z[3];
+    for (std::size_t e = 0; e < E + Ea; ++e) {
+      dz(e, z);
+      double r2 = 0;
+      for (int q = 0; q < p; ++q) r2 += (z[q] - y[e * p + q]) * (z[q] - y[e * p + q]);
+      s += wt[e] * huber(m.delta, std::sqrt(r2));
+    }
+    return s;
+  };
+  if (phi) phi->assign(1, Phi());
+  for (int t = 0; t < iters; ++t) {
+    std::vector<double> gx(x.size(), 0.0), yn = y;
+    for (std::size_t e = 0; e < E + Ea; ++e) {
+      double z[3], r[3], r2 = 0;
+      dz(e, z);
+      for (int q = 0; q < p; ++q) {
+        r[q] = z[q] - y[e * p + q];
+        r2 += r[q] * r[q];
+      }
+      const double a = wt[e] * omega(m.delta, std::sqrt(r2));
+      for (int q = 0; q < p; ++q) {
+        gx[ei[e] * p + q] += a * r[q];
+        if (ej[e] >= 0) gx[ej[e] * p + q] -= a * r[q];
+        yn[e * p + q] = y[e * p + q] + omega(m.delta, std::sqrt(r2)) / (ej[e] >= 0 ? 3.0 : 2.0) * r[q];
+      }
+      sphere(rho[e], &yn[e * p], p);
+    }
+    for (std::size_t q = 0; q < x.size(); ++q) x[q] -= gx[q] / D[q / p];
+    y.swap(yn);
+    if (phi) phi->push_back(Phi());
+  }
+  return x;
+}
+
+}  // namespace snl::reference

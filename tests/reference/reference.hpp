@@ -32,3 +32,28 @@ std::vector<double> async(const Network& net, const std::vector<double>& x0, lon
                           bool exact, std::vector<double>* fhat = nullptr);
 
 }  // namespace snl::reference
+
+namespace snl::reference {
+
+/// A measurement model (src/problem/weights.cpp): a weight per sensor row and
+/// per anchor row of the network, and the Huber threshold (0: l2). Each term
+/// is w_e rho(r_e), rho(r) = r^2/2, or Huber beyond delta.
+struct Model {
+  std::vector<double> sensor_w, anchor_w;
+  double delta = 0;
+};
+/// w = (sigma_min / sigma)^2 from the network's sensor_sigmas / anchor_sigmas
+/// (weights 1 where it has none).
+Model model_from_sigmas(const Network& net, double delta);
+double model_ml_cost(const Network& net, const Model& m, const std::vector<double>& x);
+double model_relaxed_cost(const Network& net, const Model& m, const std::vector<double>& x);
+std::vector<double> model_relaxed_gradient(const Network& net, const Model& m, const std::vector<double>& x);
+/// 003 Algorithm 1 with a step 1/D_i per sensor, D_i = 2 sum_j w_ij + sum_k w_ik.
+std::vector<double> model_nesterov(const Network& net, const Model& m, const std::vector<double>& x0, int iters);
+/// 000 Algorithm 1 with the Huber majorizer weights omega = min(1, delta/|x_i - x_j - y|)
+/// and steps 1/D: D_x_i = 3 sum_j w_ij + 2 sum_k w_ik, D_y = 3 w_e (anchors 2 w); the objective
+/// Phi = sum w rho(|x_i - x_j - y|) + anchors after each iteration into *phi.
+std::vector<double> model_mm(const Network& net, const Model& m, const std::vector<double>& x0, int iters,
+                             std::vector<double>* phi = nullptr);
+
+}  // namespace snl::reference

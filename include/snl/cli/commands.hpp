@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "snl/problem/generate.hpp"
+#include "snl/problem/noise.hpp"
 #include "snl/solvers/solver.hpp"
 
 namespace snl {
@@ -24,6 +25,7 @@ constexpr int kExitUsage = 2;
 struct GenerateCommand {
   std::string output;
   GenerateOptions options;
+  NoiseOptions noise;  ///< --noise, --nlos-fraction, --nlos-bias
   bool quiet = false;
 };
 void run_generate(const GenerateCommand& cmd, MPI_Comm comm);
@@ -65,6 +67,7 @@ struct EvalCommand {
   /// (the true positions when the network has them, else the estimate).
   std::string fim_at = "auto";
   bool no_covariance = false;  ///< do not add the per-sensor covariances to the result file
+  std::string weights = "auto", loss = "l2";  ///< the ML cost's model, as snl solve --weights/--loss
 };
 void run_eval(const EvalCommand& cmd, MPI_Comm comm);
 

@@ -88,6 +88,9 @@ class DistGraph {
   /// For clients that redraw edge data in place (Monte Carlo over noise).
   std::vector<double>& mutable_edge_values() { return edge_values_; }
   int edge_width() const { return width_; }
+  /// Removes the last column of the edge data and returns it, one value per
+  /// slot (data that travels with the edges but is not the range, e.g. sigmas).
+  std::vector<double> take_last_edge_column();
   LocalId degree(LocalId v) const { return static_cast<LocalId>(offsets_[v + 1] - offsets_[v]); }
   LocalId max_degree() const;  ///< global (collective)
 

@@ -9,6 +9,9 @@
 
 namespace snl {
 
+// Every cost, gradient and constant below uses the problem's measurement model
+// (prob.model(), weights.hpp): each term weighted by w_e and, with the Huber
+// loss, rho(r) in place of r^2/2. The unweighted l2 model is the papers' form.
 struct CostTerms {
   double ml = 0;           ///< f(x), eq. (1) of both papers
   double relaxed = 0;      ///< f_hat(x), the disk relaxation (003, eq. 6/7)
@@ -29,7 +32,8 @@ struct ErrorMetrics {
 /// Collective.
 ErrorMetrics evaluate_errors(const LocalizationProblem& prob, const double* x);
 
-/// Lipschitz constant of grad f_hat (003, eq. 16): 2 delta_max + max_i |A_i|.
+/// Lipschitz constant of grad f_hat (003, eq. 16): 2 delta_max + max_i |A_i|;
+/// weighted: 2 max_i sum_j w_ij + max_i sum_k w_ik.
 double relaxation_lipschitz(const LocalizationProblem& prob);
 
 /// Gradient of f_hat at owned nodes [begin, end) (003, Alg. 1 steps 7-8):

@@ -12,6 +12,7 @@
 
 #include "snl/graph/dist_graph.hpp"
 #include "snl/io/network.hpp"
+#include "snl/problem/weights.hpp"
 
 namespace snl {
 
@@ -56,6 +57,18 @@ class LocalizationProblem {
   const std::vector<std::uint8_t>& flags() const { return flags_; }  ///< owned rows, LocalizabilityFlag bits
   std::optional<double> sigma() const { return sigma_; }
 
+  /// The file's sigmas after merging: per CSR slot of the owned nodes and per
+  /// anchor measurement; empty unless the file has sensor_sigmas / anchor_sigmas.
+  bool has_sensor_sigmas() const { return has_sensor_sigmas_; }
+  bool has_anchor_sigmas() const { return has_anchor_sigmas_; }
+  const std::vector<double>& sensor_sigmas() const { return sensor_sigmas_; }
+  const std::vector<double>& anchor_sigmas() const { return anchor_sigmas_; }
+  /// The weights and loss every method and cost uses (weights.hpp); the
+  /// unweighted l2 model until set. Collective (weights.cpp); throws
+  /// snl::Error (on every rank) when the file lacks the sigmas `spec` needs.
+  void set_measurement_model(const WeightsSpec& spec, double huber_delta);
+  const MeasurementModel& model() const { return model_; }
+
   int max_degree() const { return delta_max_; }            ///< delta_max (global)
   int max_anchor_degree() const { return max_anchor_deg_; }  ///< max_i |A_i| (global)
 
@@ -78,7 +91,7 @@ class LocalizationProblem {
   // The constructor's steps (problem.cpp), in this order.
   void build(MPI_Comm comm, const Network& slab, PartitionMethod method, ProblemReport* report);
   void distribute_anchors(MPI_Comm comm, const std::vector<int>& owner, const std::vector<GlobalId>& aedges,
-                          const std::vector<double>& aranges);
+                          const std::vector<double>& aranges, const std::vector<double>& asigmas);
   void read_owned_rows(MPI_Comm comm, const Network& slab);
   void flag_sensors(MPI_Comm comm, const std::vector<std::uint8_t>& unanchored, ProblemReport& rep);
   int dim_ = 2;
@@ -91,6 +104,9 @@ class LocalizationProblem {
   std::vector<double> truth_;
   std::vector<std::uint8_t> flags_;
   std::optional<double> sigma_;
+  bool has_sensor_sigmas_ = false, has_anchor_sigmas_ = false;
+  std::vector<double> sensor_sigmas_, anchor_sigmas_;
+  MeasurementModel model_;
   int delta_max_ = 0, max_anchor_deg_ = 0;
 };
 

@@ -32,6 +32,7 @@ struct AlgorithmInfo {
   bool consensus_rounds;   ///< honours --bb-rounds (consensus rounds per iteration)
   bool monotone_surrogate; ///< --check-monotone verifies its objective (the MM surrogate) never increases
   bool gap_certificate;    ///< where it ends, the 003 eq. 22 certificate is valid (a minimizer of f_hat)
+  bool measurement_model = false;  ///< honours --weights and --loss (weights.hpp)
 };
 
 /// Every method, in the order of the CLI help.

@@ -61,6 +61,11 @@ struct SolverOptions {
   bool check_monotone = true;
 #endif
   std::uint64_t seed = 1;
+  /// Weights of the ML cost (weights.hpp): file | multiplicative:NF | none, or
+  /// auto (file when the network has sigmas, else none).
+  std::string weights = "auto";
+  /// Loss on the range residuals: l2 | huber:DELTA.
+  std::string loss = "l2";
   /// "" if valid, else the message (unsupported_option() included).
   std::string validate() const;
   /// "" unless an option is set to a non-default value that the algorithm
