@@ -1,9 +1,11 @@
 #pragma once
-// A minimal JSON object writer for summaries (flat keys, numbers and strings).
+// A minimal JSON object writer for summaries (flat keys, numbers, strings and
+// arrays of integers).
 #include <cmath>
 #include <cstdint>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace snl {
 
@@ -34,6 +36,13 @@ class JsonObject {
     return *this;
   }
   JsonObject& add(const std::string& key, int v) { return add(key, static_cast<std::int64_t>(v)); }
+  JsonObject& add_array(const std::string& key, const std::vector<std::int64_t>& v) {
+    sep();
+    os_ << quote(key) << ": [";
+    for (std::size_t i = 0; i < v.size(); ++i) os_ << (i ? ", " : "") << v[i];
+    os_ << "]";
+    return *this;
+  }
   JsonObject& add_bool(const std::string& key, bool v) {
     sep();
     os_ << quote(key) << ": " << (v ? "true" : "false");

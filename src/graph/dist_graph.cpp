@@ -226,9 +226,10 @@ struct HalfTagged {
 // Step 1: every edge goes to the owners of both ends (once if they
 // coincide), with its `width` values and both ends' directory slots. Three
 // hops, none needing anything of size n: to the block holder of a (skipped
-// when every rank already holds only such edges, as the problem's merged
-// measurements are), which tags a's owner; to the block holder of b, which
-// tags b's and counts the cut; to the owners. Returns the local edge cut.
+// when every rank holds only edges with an end in its block, as the
+// problem's merged measurements are; that end is then a), which tags a's
+// owner; to the block holder of b, which tags b's and counts the cut; to the
+// owners. Edges are undirected: a and b may swap. Returns the local edge cut.
 GlobalId route_edges(MPI_Comm comm, const OwnerDirectory& dir, const std::vector<GlobalId>& edges,
                      const std::vector<double>& edge_values, int width, std::vector<EdgeRec>& mine,
                      std::vector<double>& mine_vals) {
@@ -238,11 +239,14 @@ GlobalId route_edges(MPI_Comm comm, const OwnerDirectory& dir, const std::vector
   std::vector<double> half_vals;
   {
     int local = 1, all = 0;
-    for (std::size_t k = 0; k < edges.size() && local; k += 2)
-      local = edges[k] >= dir.block_begin() && edges[k] < dir.block_end();
+    auto in_block = [&](GlobalId g) { return g >= dir.block_begin() && g < dir.block_end(); };
+    for (std::size_t k = 0; k < edges.size() && local; k += 2) local = in_block(edges[k]) || in_block(edges[k + 1]);
     MPI_Allreduce(&local, &all, 1, MPI_INT, MPI_MIN, comm);
     std::vector<HalfTagged> pairs(edges.size() / 2);
-    for (std::size_t e = 0; e < pairs.size(); ++e) pairs[e] = {edges[2 * e], edges[2 * e + 1], -1, -1};
+    for (std::size_t e = 0; e < pairs.size(); ++e) {
+      const bool swap = all && !in_block(edges[2 * e]);
+      pairs[e] = {edges[2 * e + (swap ? 1 : 0)], edges[2 * e + (swap ? 0 : 1)], -1, -1};
+    }
     if (all) {
       half = std::move(pairs);
       half_vals = edge_values;

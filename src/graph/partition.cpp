@@ -151,6 +151,9 @@ std::string metis_partition(GlobalId n, const std::vector<GlobalId>& edges, int 
       adjncy[fill[edges[e + 1]]++] = static_cast<idx_t>(edges[e]);
     }
   }
+  // Neighbours in ascending order: METIS's result depends on the order, and
+  // this one does not depend on which rank held which edge.
+  for (GlobalId v = 0; v < n; ++v) std::sort(adjncy.begin() + xadj[v], adjncy.begin() + xadj[v + 1]);
   phase("metis_graph");
   idx_t nvtxs = static_cast<idx_t>(n), ncon = 1, np = nparts, objval = 0;
   idx_t options[METIS_NOPTIONS];

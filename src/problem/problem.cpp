@@ -63,8 +63,10 @@ struct Measurements {
   std::vector<double> sranges, aranges;
 };
 
-// Step 1: merge duplicates. Every measurement goes to the block owner of its
-// smaller sensor id, where all copies of a pair meet; rep gets the counts.
+// Step 1: merge duplicates. Every measurement goes to the block owner of one
+// of its two sensors, chosen by a hash of the pair, where all copies of the
+// pair meet; rep gets the counts. (The smaller id would load rank r with
+// (2(P - r) - 1)/P^2 of the pairs: rank 0 with twice the mean.)
 Measurements merge_measurements(MPI_Comm comm, const Network& slab, ProblemReport& rep) {
   const int size = comm_size(comm);
   const GlobalId n = slab.num_sensors;
@@ -73,7 +75,10 @@ Measurements merge_measurements(MPI_Comm comm, const Network& slab, ProblemRepor
   for (GlobalId e = 0; e < slab.local_sensor_edges(); ++e) {
     GlobalId a = slab.sensor_edges[2 * e], b = slab.sensor_edges[2 * e + 1];
     if (a > b) std::swap(a, b);
-    out[block_owner(n, size, a)].push_back({a, b, slab.sensor_ranges[e]});
+    const GlobalId key = (mix64(static_cast<std::uint64_t>(a) * 0x9e3779b97f4a7c15ULL ^ static_cast<std::uint64_t>(b)) & 1)
+                             ? b
+                             : a;
+    out[block_owner(n, size, key)].push_back({a, b, slab.sensor_ranges[e]});
   }
   auto got = exchange_records(comm, out);
   test_fail_point("alloc");  // fault-injection tests: one rank runs out of memory between collectives
