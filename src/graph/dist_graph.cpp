@@ -201,21 +201,66 @@ class PhaseClock {
   double mark_;
 };
 
-// Moves records (with `width` values each) to the ranks dest(k) returns for
-// record k; returns what this rank received, values alongside.
-template <class Rec, class Dest>
-void send_records(MPI_Comm comm, const std::vector<Rec>& recs, const std::vector<double>& vals, int width,
-                  Dest&& dest, std::vector<Rec>& got, std::vector<double>& got_vals) {
+// MPI_Alltoallv of a send buffer already in rank order (scount[r] items for
+// rank r) of trivially copyable items; returns what this rank received.
+template <class T>
+std::vector<T> alltoallv_packed(MPI_Comm comm, const std::vector<T>& sbuf, const std::vector<int>& scount) {
   const int size = comm_size(comm);
-  std::vector<std::vector<Rec>> out(size);
-  std::vector<std::vector<double>> out_vals(size);
-  for (std::size_t k = 0; k < recs.size(); ++k) {
-    const int r = dest(k);
-    out[r].push_back(recs[k]);
-    out_vals[r].insert(out_vals[r].end(), vals.begin() + k * width, vals.begin() + (k + 1) * width);
+  MPI_Datatype rec;
+  MPI_Type_contiguous(static_cast<int>(sizeof(T)), MPI_BYTE, &rec);
+  MPI_Type_commit(&rec);
+  std::vector<int> rcount(size), sdisp(size), rdisp(size);
+  MPI_Alltoall(scount.data(), 1, MPI_INT, rcount.data(), 1, MPI_INT, comm);
+  std::int64_t rtot = 0, stot = 0;
+  for (int r = 0; r < size; ++r) {
+    sdisp[r] = static_cast<int>(stot);
+    rdisp[r] = static_cast<int>(rtot);
+    stot += scount[r];
+    rtot += rcount[r];
   }
-  got = exchange_records(comm, out);
-  got_vals = exchange_records(comm, out_vals);
+  if (rtot > INT32_MAX || stot > INT32_MAX) throw Error("edge exchange: volume exceeds 2^31 records on one rank");
+  std::vector<T> rbuf(static_cast<std::size_t>(rtot));
+  MPI_Alltoallv(sbuf.data(), scount.data(), sdisp.data(), rec, rbuf.data(), rcount.data(), rdisp.data(), rec, comm);
+  MPI_Type_free(&rec);
+  return rbuf;
+}
+
+// Moves records (with `width` values each) to the ranks dest(k) returns for
+// record k; returns what this rank received (rank order, then k order),
+// values alongside. Consumes recs and vals: they are packed straight into one
+// send buffer in rank order and freed before the exchange, so one copy of the
+// edges is in flight per hop (at 10M on 2 ranks per-destination vectors plus
+// exchange_records's packing held four).
+template <class Rec, class Dest>
+void send_records(MPI_Comm comm, std::vector<Rec>&& recs, std::vector<double>&& vals, int width, Dest&& dest,
+                  std::vector<Rec>& got, std::vector<double>& got_vals) {
+  const int size = comm_size(comm);
+  std::vector<std::int32_t> to(recs.size());
+  std::vector<std::int64_t> start(static_cast<std::size_t>(size) + 1, 0);
+  for (std::size_t k = 0; k < recs.size(); ++k) {
+    to[k] = dest(k);
+    ++start[to[k] + 1];
+  }
+  std::vector<int> scount(size), vcount(size);
+  for (int r = 0; r < size; ++r) {
+    if (start[r + 1] > INT32_MAX / std::max(width, 1)) throw Error("edge exchange: message too large");
+    scount[r] = static_cast<int>(start[r + 1]);
+    vcount[r] = scount[r] * width;
+    start[r + 1] += start[r];
+  }
+  std::vector<Rec> sbuf(recs.size());
+  std::vector<double> svals(vals.size());
+  for (std::size_t k = 0; k < recs.size(); ++k) {
+    const auto pos = start[to[k]]++;
+    sbuf[pos] = recs[k];
+    std::copy(vals.begin() + k * width, vals.begin() + (k + 1) * width, svals.begin() + pos * width);
+  }
+  recs = {};
+  vals = {};
+  to = {};
+  got = alltoallv_packed(comm, sbuf, scount);
+  sbuf = {};
+  got_vals = alltoallv_packed(comm, svals, vcount);
 }
 
 struct HalfTagged {
@@ -243,16 +288,17 @@ GlobalId route_edges(MPI_Comm comm, const OwnerDirectory& dir, const std::vector
     for (std::size_t k = 0; k < edges.size() && local; k += 2) local = in_block(edges[k]) || in_block(edges[k + 1]);
     MPI_Allreduce(&local, &all, 1, MPI_INT, MPI_MIN, comm);
     std::vector<HalfTagged> pairs(edges.size() / 2);
+    std::vector<double> pair_vals(edge_values);
     for (std::size_t e = 0; e < pairs.size(); ++e) {
       const bool swap = all && !in_block(edges[2 * e]);
       pairs[e] = {edges[2 * e + (swap ? 1 : 0)], edges[2 * e + (swap ? 0 : 1)], -1, -1};
     }
     if (all) {
       half = std::move(pairs);
-      half_vals = edge_values;
+      half_vals = std::move(pair_vals);
     } else {
-      send_records(comm, pairs, edge_values, width, [&](std::size_t k) { return block_owner(n, size, pairs[k].a); },
-                   half, half_vals);
+      send_records(comm, std::move(pairs), std::move(pair_vals), width,
+                   [&](std::size_t k) { return block_owner(n, size, pairs[k].a); }, half, half_vals);
     }
   }
   for (auto& h : half) {
@@ -262,10 +308,8 @@ GlobalId route_edges(MPI_Comm comm, const OwnerDirectory& dir, const std::vector
   }
   std::vector<HalfTagged> at_b;
   std::vector<double> at_b_vals;
-  send_records(comm, half, half_vals, width, [&](std::size_t k) { return block_owner(n, size, half[k].b); }, at_b,
-               at_b_vals);
-  half = {};
-  half_vals = {};
+  send_records(comm, std::move(half), std::move(half_vals), width,
+               [&](std::size_t k) { return block_owner(n, size, half[k].b); }, at_b, at_b_vals);
   std::vector<EdgeRec> full(at_b.size());
   GlobalId cut = 0;
   for (std::size_t k = 0; k < at_b.size(); ++k) {
@@ -288,8 +332,8 @@ GlobalId route_edges(MPI_Comm comm, const OwnerDirectory& dir, const std::vector
   at_b_vals.insert(at_b_vals.end(), dup_vals.begin(), dup_vals.end());
   dup = {};
   dup_vals = {};
-  send_records(comm, full, at_b_vals, width, [&](std::size_t k) { return k < n_first ? full[k].oa : full[k].ob; }, mine,
-               mine_vals);
+  send_records(comm, std::move(full), std::move(at_b_vals), width,
+               [&](std::size_t k) { return k < n_first ? full[k].oa : full[k].ob; }, mine, mine_vals);
   return cut;
 }
 
