@@ -91,7 +91,9 @@ void add_solve(CLI::App& app, Commands& c) {
   s->add_option("--init", c.solve.init, "'random' or a file with dataset positions [n,p]")->capture_default_str();
   s->add_option("--seed", c.solve.solver.seed, "seed of --init random and of the async activation clock")
       ->capture_default_str();
-  s->add_option("--partition", c.solve.partition, "metis|block")->capture_default_str();
+  s->add_option("--partition", c.solve.partition,
+                "auto|metis|parmetis|block (auto: metis on one node up to 4M sensors, else parmetis)")
+      ->capture_default_str();
   s->add_option("--history-every", c.solve.solver.history_every, "record history every K iterations (0: auto)")
       ->capture_default_str();
   s->add_option("--bb-rounds", c.solve.solver.bb_rounds,
@@ -159,7 +161,7 @@ void add_experiment(CLI::App& app, Commands& c) {
   x->add_option("--reach-rel", c.experiment.reach_rel, "relative margin for 'reached the best final cost'")
       ->capture_default_str();
   x->add_option("--seed", c.experiment.seed, "seed of the noise draws and starts")->capture_default_str();
-  x->add_option("--partition", c.experiment.partition, "metis|block")->capture_default_str();
+  x->add_option("--partition", c.experiment.partition, "auto|metis|parmetis|block")->capture_default_str();
   x->add_flag("-q,--quiet", c.experiment.quiet, "no progress output");
 }
 

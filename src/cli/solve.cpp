@@ -236,9 +236,12 @@ struct SolveTimes {
 // graph on rank 0 included), halo volume, bytes of the problem; sums and maxima over ranks.
 struct MemoryTotals {
   long long tot[4], mx[4];  // peak RSS, halo nodes sent per iteration, problem bytes, owned nodes
+  /// Per rank (on rank 0), in rank order: peak RSS, problem bytes, owned
+  /// sensors, then the setup accounting (ProblemReport::setup_bytes).
+  std::vector<std::pair<std::string, std::vector<std::int64_t>>> per_rank;
 };
 
-MemoryTotals memory_totals(const LocalizationProblem& prob, MPI_Comm comm) {
+MemoryTotals memory_totals(const LocalizationProblem& prob, const ProblemReport& rep, MPI_Comm comm) {
   struct rusage ru;
   getrusage(RUSAGE_SELF, &ru);
   long long loc[4] = {static_cast<long long>(ru.ru_maxrss) * 1024,  // Linux: KiB
@@ -247,6 +250,18 @@ MemoryTotals memory_totals(const LocalizationProblem& prob, MPI_Comm comm) {
   MemoryTotals m;
   MPI_Allreduce(loc, m.tot, 4, MPI_LONG_LONG, MPI_SUM, comm);
   MPI_Allreduce(loc, m.mx, 4, MPI_LONG_LONG, MPI_MAX, comm);
+  std::vector<std::pair<std::string, std::int64_t>> mine = {
+      {"peak_rss_bytes", loc[0]}, {"problem_bytes", loc[2]}, {"memory_owned_sensors", loc[3]}};
+  for (const auto& sb : rep.setup_bytes) mine.emplace_back("setup_" + sb.first + "_bytes", sb.second);
+  std::vector<std::int64_t> vals(mine.size()), all(mine.size() * comm_size(comm));
+  for (std::size_t k = 0; k < mine.size(); ++k) vals[k] = mine[k].second;
+  MPI_Gather(vals.data(), static_cast<int>(vals.size()), MPI_INT64_T, all.data(), static_cast<int>(vals.size()),
+             MPI_INT64_T, 0, comm);
+  for (std::size_t k = 0; k < mine.size(); ++k) {
+    std::vector<std::int64_t> col(comm_size(comm));
+    for (int r = 0; r < comm_size(comm); ++r) col[r] = all[r * mine.size() + k];
+    m.per_rank.emplace_back(mine[k].first + "_per_rank", std::move(col));
+  }
   return m;
 }
 
@@ -306,6 +321,7 @@ std::string json_summary(const SolveCommand& cmd, const LoadedProblem& lp, const
   j.add("simd", detail::simd_name());
   j.add("temporal_block", cmd.solver.temporal_block);
   for (const auto& ph : rep.setup_phases) j.add("setup_" + ph.first + "_seconds", ph.second);
+  for (const auto& pr : m.per_rank) j.add_array(pr.first, pr.second);
   if (s.errors.valid) {
     j.add("rmse", s.errors.rmse).add("mpe", s.errors.mpe);
     j.add("rmse_localizable", s.errors.rmse_localizable).add("mpe_localizable", s.errors.mpe_localizable);
@@ -339,7 +355,7 @@ int run_solve(const SolveCommand& cmd, MPI_Comm comm) {
   write_result_file(cmd, lp, s, x, comm);
   t.write = MPI_Wtime();
   if (!cmd.json.empty())
-    detail::write_text_on_root(cmd.json, json_summary(cmd, lp, s, t, memory_totals(*lp.prob, comm)), comm);
+    detail::write_text_on_root(cmd.json, json_summary(cmd, lp, s, t, memory_totals(*lp.prob, lp.rep, comm)), comm);
   if (talk) std::fprintf(stderr, "%s\n", s.brief_report().c_str());
   if (talk) report_iteration_cap(cmd, s);
   return s.termination == TerminationType::kFailure ? 4 : 0;

@@ -1,5 +1,6 @@
 #pragma once
-// A minimal JSON object writer for summaries (flat keys, numbers and strings).
+// A minimal JSON object writer for summaries (flat keys, numbers, strings and
+// arrays of integers).
 #include <cmath>
 #include <cstdint>
 #include <sstream>
@@ -36,7 +37,8 @@ class JsonObject {
   }
   JsonObject& add(const std::string& key, int v) { return add(key, static_cast<std::int64_t>(v)); }
   /// An array of integers.
-  JsonObject& add(const std::string& key, const std::vector<std::int64_t>& v) {
+  JsonObject& add(const std::string& key, const std::vector<std::int64_t>& v) { return add_array(key, v); }
+  JsonObject& add_array(const std::string& key, const std::vector<std::int64_t>& v) {
     sep();
     os_ << quote(key) << ": [";
     for (std::size_t i = 0; i < v.size(); ++i) os_ << (i ? ", " : "") << v[i];

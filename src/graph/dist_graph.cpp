@@ -1,7 +1,5 @@
 #include "snl/graph/dist_graph.hpp"
 
-#include <metis.h>
-
 #include <algorithm>
 #include <cstdlib>
 #include <cstring>
@@ -13,161 +11,20 @@
 
 namespace snl {
 
-PartitionMethod parse_partition_method(const std::string& s) {
-  if (s == "metis") return PartitionMethod::kMetis;
-  if (s == "block") return PartitionMethod::kBlock;
-  throw Error("unknown partition method '" + s + "' (expected metis or block)");
-}
-
-namespace {
-
-// METIS k-way on rank 0. Returns "" on success, else why it could not run.
-// phase(name) marks the end of a phase (PartitionStats::phases).
-template <class Phase>
-std::string metis_partition(GlobalId n, const std::vector<GlobalId>& edges, int nparts, std::vector<int>& owner,
-                            Phase&& phase) {
-  const std::int64_t nnz = static_cast<std::int64_t>(edges.size());  // = 2E directed entries
-  static_assert(sizeof(idx_t) == 4 || sizeof(idx_t) == 8, "unexpected METIS idx_t");
-  const std::int64_t idx_max = std::numeric_limits<idx_t>::max();
-  if (n > idx_max || nnz > idx_max)
-    return "graph too large for this METIS build (" + std::to_string(sizeof(idx_t) * 8) + "-bit idx_t)";
-  std::vector<idx_t> xadj(static_cast<std::size_t>(n) + 1, 0), adjncy(static_cast<std::size_t>(nnz));
-  for (std::size_t e = 0; e < edges.size(); e += 2) {
-    ++xadj[edges[e] + 1];
-    ++xadj[edges[e + 1] + 1];
-  }
-  for (GlobalId v = 0; v < n; ++v) xadj[v + 1] += xadj[v];
-  {
-    std::vector<idx_t> fill(xadj.begin(), xadj.end() - 1);
-    for (std::size_t e = 0; e < edges.size(); e += 2) {
-      adjncy[fill[edges[e]]++] = static_cast<idx_t>(edges[e + 1]);
-      adjncy[fill[edges[e + 1]]++] = static_cast<idx_t>(edges[e]);
-    }
-  }
-  phase("metis_graph");
-  idx_t nvtxs = static_cast<idx_t>(n), ncon = 1, np = nparts, objval = 0;
-  idx_t options[METIS_NOPTIONS];
-  METIS_SetDefaultOptions(options);
-  options[METIS_OPTION_SEED] = 1;  // deterministic partitions
-  options[METIS_OPTION_NUMBERING] = 0;
-  std::vector<idx_t> part(static_cast<std::size_t>(n), 0);
-  int status = METIS_ERROR;
-  try {
-    status = METIS_PartGraphKway(&nvtxs, &ncon, xadj.data(), adjncy.data(), nullptr, nullptr, nullptr, &np, nullptr,
-                                 nullptr, options, &objval, part.data());
-  } catch (...) {
-    status = METIS_ERROR;
-  }
-  if (status != METIS_OK) return status == METIS_ERROR_MEMORY ? "METIS ran out of memory" : "METIS failed";
-  owner.assign(part.begin(), part.end());
-  phase("metis");
-  return "";
-}
-
-}  // namespace
-
-namespace {
-
-// METIS on rank 0 over the gathered edge lists, owners broadcast to every
-// rank. Collective; returns "" on success, else why it could not run.
-template <class Phase>
-std::string metis_on_root(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, std::vector<int>& owner,
-                          Phase&& phase) {
-  std::vector<GlobalId> all = gather_to_root(comm, edges);
-  phase("gather");
-  std::string why;
-  if (comm_rank(comm) == 0) {
-    try {
-      why = metis_partition(n, all, comm_size(comm), owner, phase);
-    } catch (const std::bad_alloc&) {
-      why = "out of memory building the METIS graph";
-    }
-  }
-  all.clear();
-  all.shrink_to_fit();
-  why = bcast_string(comm, why);
-  if (why.empty()) {
-    bcast_bytes(comm, owner.data(), owner.size() * sizeof(int));
-    phase("bcast");
-  }
-  return why;
-}
-
-// Contiguous blocks of global ids (block_range), one per rank.
-void block_owners(GlobalId n, int size, std::vector<int>& owner) {
-  for (int r = 0; r < size; ++r) {
-    GlobalId b, e;
-    block_range(n, size, r, b, e);
-    std::fill(owner.begin() + b, owner.begin() + e, r);
-  }
-}
-
-// Edge cut (collective) and imbalance of `owner` into stats.
-void partition_quality(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, const std::vector<int>& owner,
-                       PartitionStats& stats) {
-  const int size = comm_size(comm);
-  long long cut = 0;
-  for (std::size_t e = 0; e < edges.size(); e += 2) cut += owner[edges[e]] != owner[edges[e + 1]];
-  long long gcut = 0;
-  MPI_Allreduce(&cut, &gcut, 1, MPI_LONG_LONG, MPI_SUM, comm);
-  stats.edge_cut = gcut;
-  std::vector<GlobalId> counts(size, 0);
-  for (int o : owner) ++counts[o];
-  const double mean = static_cast<double>(n) / size;
-  stats.imbalance = mean > 0 ? static_cast<double>(*std::max_element(counts.begin(), counts.end())) / mean : 1.0;
-}
-
-}  // namespace
-
-std::vector<int> partition_graph(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges,
-                                 PartitionMethod method, PartitionStats* stats) {
-  const double t0 = MPI_Wtime();
-  double tmark = t0;
-  std::vector<std::pair<std::string, double>> phases;
-  auto phase = [&](const char* name) {
-    const double now = MPI_Wtime();
-    phases.emplace_back(name, now - tmark);
-    tmark = now;
-  };
-  const int size = comm_size(comm);
-  std::vector<int> owner(static_cast<std::size_t>(n));
-  std::string used = "block", note;
-  bool done = false;
-  if (method == PartitionMethod::kMetis && size > 1) {
-    const std::string why = metis_on_root(comm, n, edges, owner, phase);
-    if (why.empty()) {
-      used = "metis";
-      done = true;
-    } else {
-      note = why + "; used the block partition instead";
-    }
-  } else if (method == PartitionMethod::kMetis) {
-    used = "metis";  // one rank: the trivial partition
-  }
-  if (!done) block_owners(n, size, owner);
-  if (stats) {
-    stats->method = used;
-    stats->note = note;
-    partition_quality(comm, n, edges, owner, *stats);
-    phase("stats");
-    stats->phases = std::move(phases);
-    stats->seconds = MPI_Wtime() - t0;
-  }
-  return owner;
-}
-
 LocalOrdering default_local_ordering() {
   const char* e = std::getenv("SNL_LOCAL_ORDER");
   return (e && std::strcmp(e, "gid") == 0) ? LocalOrdering::kGlobalId : LocalOrdering::kRcm;
 }
 
 namespace {
+// An edge with the owner and owner-side index of both ends (OwnerDirectory::Slot).
 struct EdgeRec {
   GlobalId a, b;
+  std::int32_t oa, ia, ob, ib;
 };
 struct Entry {
   GlobalId nbr;
-  std::int64_t src;  // index into the received edge list (for values)
+  std::int64_t src;  // index into the received edge list (values, the neighbour's owner)
 };
 
 // Within consecutive windows of kDegreeWindow nodes, nodes of equal degree
@@ -344,55 +201,175 @@ class PhaseClock {
   double mark_;
 };
 
-// Step 1: every edge goes to the owners of both ends (once if they
-// coincide), with its `width` values; returns what this rank received.
-void route_edges(MPI_Comm comm, const std::vector<int>& owner, const std::vector<GlobalId>& edges,
-                 const std::vector<double>& edge_values, int width, std::vector<EdgeRec>& mine,
-                 std::vector<double>& mine_vals) {
+// MPI_Alltoallv of a send buffer already in rank order (scount[r] items for
+// rank r) of trivially copyable items; returns what this rank received.
+template <class T>
+std::vector<T> alltoallv_packed(MPI_Comm comm, const std::vector<T>& sbuf, const std::vector<int>& scount) {
   const int size = comm_size(comm);
-  std::vector<std::vector<EdgeRec>> out(size);
-  std::vector<std::vector<double>> out_vals(size);
-  for (std::size_t e = 0; 2 * e < edges.size(); ++e) {
-    const GlobalId a = edges[2 * e], b = edges[2 * e + 1];
-    const int oa = owner[a], ob = owner[b];
-    out[oa].push_back({a, b});
-    out_vals[oa].insert(out_vals[oa].end(), edge_values.begin() + e * width, edge_values.begin() + (e + 1) * width);
-    if (ob != oa) {
-      out[ob].push_back({a, b});
-      out_vals[ob].insert(out_vals[ob].end(), edge_values.begin() + e * width, edge_values.begin() + (e + 1) * width);
+  MPI_Datatype rec;
+  MPI_Type_contiguous(static_cast<int>(sizeof(T)), MPI_BYTE, &rec);
+  MPI_Type_commit(&rec);
+  std::vector<int> rcount(size), sdisp(size), rdisp(size);
+  MPI_Alltoall(scount.data(), 1, MPI_INT, rcount.data(), 1, MPI_INT, comm);
+  std::int64_t rtot = 0, stot = 0;
+  for (int r = 0; r < size; ++r) {
+    sdisp[r] = static_cast<int>(stot);
+    rdisp[r] = static_cast<int>(rtot);
+    stot += scount[r];
+    rtot += rcount[r];
+  }
+  if (rtot > INT32_MAX || stot > INT32_MAX) throw Error("edge exchange: volume exceeds 2^31 records on one rank");
+  std::vector<T> rbuf(static_cast<std::size_t>(rtot));
+  MPI_Alltoallv(sbuf.data(), scount.data(), sdisp.data(), rec, rbuf.data(), rcount.data(), rdisp.data(), rec, comm);
+  MPI_Type_free(&rec);
+  return rbuf;
+}
+
+// Moves records (with `width` values each) to the ranks dest(k) returns for
+// record k; returns what this rank received (rank order, then k order),
+// values alongside. Consumes recs and vals: they are packed straight into one
+// send buffer in rank order and freed before the exchange, so one copy of the
+// edges is in flight per hop (at 10M on 2 ranks per-destination vectors plus
+// exchange_records's packing held four).
+template <class Rec, class Dest>
+void send_records(MPI_Comm comm, std::vector<Rec>&& recs, std::vector<double>&& vals, int width, Dest&& dest,
+                  std::vector<Rec>& got, std::vector<double>& got_vals) {
+  const int size = comm_size(comm);
+  std::vector<std::int32_t> to(recs.size());
+  std::vector<std::int64_t> start(static_cast<std::size_t>(size) + 1, 0);
+  for (std::size_t k = 0; k < recs.size(); ++k) {
+    to[k] = dest(k);
+    ++start[to[k] + 1];
+  }
+  std::vector<int> scount(size), vcount(size);
+  for (int r = 0; r < size; ++r) {
+    if (start[r + 1] > INT32_MAX / std::max(width, 1)) throw Error("edge exchange: message too large");
+    scount[r] = static_cast<int>(start[r + 1]);
+    vcount[r] = scount[r] * width;
+    start[r + 1] += start[r];
+  }
+  std::vector<Rec> sbuf(recs.size());
+  std::vector<double> svals(vals.size());
+  for (std::size_t k = 0; k < recs.size(); ++k) {
+    const auto pos = start[to[k]]++;
+    sbuf[pos] = recs[k];
+    std::copy(vals.begin() + k * width, vals.begin() + (k + 1) * width, svals.begin() + pos * width);
+  }
+  recs = {};
+  vals = {};
+  to = {};
+  got = alltoallv_packed(comm, sbuf, scount);
+  sbuf = {};
+  got_vals = alltoallv_packed(comm, svals, vcount);
+}
+
+struct HalfTagged {
+  GlobalId a, b;
+  std::int32_t oa, ia;
+};
+
+// Step 1: every edge goes to the owners of both ends (once if they
+// coincide), with its `width` values and both ends' directory slots. Three
+// hops, none needing anything of size n: to the block holder of a (skipped
+// when every rank holds only edges with an end in its block, as the
+// problem's merged measurements are; that end is then a), which tags a's
+// owner; to the block holder of b, which tags b's and counts the cut; to the
+// owners. Edges are undirected: a and b may swap. Returns the local edge cut.
+GlobalId route_edges(MPI_Comm comm, const OwnerDirectory& dir, const std::vector<GlobalId>& edges,
+                     const std::vector<double>& edge_values, int width, std::vector<EdgeRec>& mine,
+                     std::vector<double>& mine_vals) {
+  const int size = comm_size(comm);
+  const GlobalId n = dir.num_global();
+  std::vector<HalfTagged> half;
+  std::vector<double> half_vals;
+  {
+    int local = 1, all = 0;
+    auto in_block = [&](GlobalId g) { return g >= dir.block_begin() && g < dir.block_end(); };
+    for (std::size_t k = 0; k < edges.size() && local; k += 2) local = in_block(edges[k]) || in_block(edges[k + 1]);
+    MPI_Allreduce(&local, &all, 1, MPI_INT, MPI_MIN, comm);
+    std::vector<HalfTagged> pairs(edges.size() / 2);
+    std::vector<double> pair_vals(edge_values);
+    for (std::size_t e = 0; e < pairs.size(); ++e) {
+      const bool swap = all && !in_block(edges[2 * e]);
+      pairs[e] = {edges[2 * e + (swap ? 1 : 0)], edges[2 * e + (swap ? 0 : 1)], -1, -1};
+    }
+    if (all) {
+      half = std::move(pairs);
+      half_vals = std::move(pair_vals);
+    } else {
+      send_records(comm, std::move(pairs), std::move(pair_vals), width,
+                   [&](std::size_t k) { return block_owner(n, size, pairs[k].a); }, half, half_vals);
     }
   }
-  mine = exchange_records(comm, out);
-  mine_vals = exchange_records(comm, out_vals);
+  for (auto& h : half) {
+    const auto& s = dir.local(h.a);
+    h.oa = s.owner;
+    h.ia = s.index;
+  }
+  std::vector<HalfTagged> at_b;
+  std::vector<double> at_b_vals;
+  send_records(comm, std::move(half), std::move(half_vals), width,
+               [&](std::size_t k) { return block_owner(n, size, half[k].b); }, at_b, at_b_vals);
+  std::vector<EdgeRec> full(at_b.size());
+  GlobalId cut = 0;
+  for (std::size_t k = 0; k < at_b.size(); ++k) {
+    const auto& h = at_b[k];
+    const auto& s = dir.local(h.b);
+    full[k] = {h.a, h.b, h.oa, h.ia, s.owner, s.index};
+    cut += h.oa != s.owner;
+  }
+  at_b = {};
+  // To the owner of a, and to the owner of b if it is another rank.
+  std::vector<EdgeRec> dup;
+  std::vector<double> dup_vals;
+  for (std::size_t k = 0; k < full.size(); ++k)
+    if (full[k].ob != full[k].oa) {
+      dup.push_back(full[k]);
+      dup_vals.insert(dup_vals.end(), at_b_vals.begin() + k * width, at_b_vals.begin() + (k + 1) * width);
+    }
+  const std::size_t n_first = full.size();
+  full.insert(full.end(), dup.begin(), dup.end());
+  at_b_vals.insert(at_b_vals.end(), dup_vals.begin(), dup_vals.end());
+  dup = {};
+  dup_vals = {};
+  send_records(comm, std::move(full), std::move(at_b_vals), width,
+               [&](std::size_t k) { return k < n_first ? full[k].oa : full[k].ob; }, mine, mine_vals);
+  return cut;
 }
 
 // The owned nodes and their neighbour lists, indexed by position in `owned`
-// (global order), before the local numbering.
+// (global order = the directory's owner-side index), before the local numbering.
 struct OwnedLists {
-  std::vector<GlobalId> owned;          // owned nodes in global order
-  std::vector<std::int32_t> owned_pos;  // global id -> index in `owned`, -1 if not owned
-  std::vector<std::int64_t> cnt;        // owned index v: entries [cnt[v], cnt[v + 1])
-  std::vector<Entry> entries;           // per node sorted by neighbour global id
-  std::vector<char> boundary;           // owned index v has a neighbour on another rank
-  std::int64_t index(GlobalId g) const { return owned_pos[g]; }
+  std::vector<GlobalId> owned;    // owned nodes in global order
+  std::vector<std::int64_t> cnt;  // owned index v: entries [cnt[v], cnt[v + 1])
+  std::vector<Entry> entries;     // per node sorted by neighbour global id
+  std::vector<char> boundary;     // owned index v has a neighbour on another rank
+  int rank = 0;
+  const std::vector<EdgeRec>* recs = nullptr;  // the received edges (Entry::src)
+  // Owner and owner-side index of entry k's neighbour.
+  std::int32_t nbr_owner(std::int64_t k) const {
+    const EdgeRec& r = (*recs)[entries[k].src];
+    return entries[k].nbr == r.a ? r.oa : r.ob;
+  }
+  std::int32_t nbr_index(std::int64_t k) const {
+    const EdgeRec& r = (*recs)[entries[k].src];
+    return entries[k].nbr == r.a ? r.ia : r.ib;
+  }
 };
 
 // Step 2: the owned nodes in global order, then per-node neighbour lists
 // sorted by global id (the fixed summation order) from the received edges.
-OwnedLists neighbour_lists(GlobalId n, const std::vector<int>& owner, int rank, const std::vector<EdgeRec>& mine) {
+OwnedLists neighbour_lists(const OwnerDirectory& dir, int rank, const std::vector<EdgeRec>& mine) {
   OwnedLists L;
-  for (GlobalId g = 0; g < n; ++g)
-    if (owner[g] == rank) L.owned.push_back(g);
+  L.recs = &mine;
+  L.rank = rank;
+  L.owned = dir.owned_nodes();
   if (L.owned.size() > static_cast<std::size_t>(std::numeric_limits<LocalId>::max()))
     throw Error("too many sensors on one rank for 32-bit local ids; use more ranks");
-  // Global id -> index in `owned` in O(1) (4 bytes per global node, like
-  // `owner`): a binary search per edge end dominated the setup at 10^7 nodes.
-  L.owned_pos.assign(static_cast<std::size_t>(n), -1);
-  for (std::size_t v = 0; v < L.owned.size(); ++v) L.owned_pos[L.owned[v]] = static_cast<std::int32_t>(v);
   L.cnt.assign(L.owned.size() + 1, 0);
   for (const auto& r : mine) {
-    if (owner[r.a] == rank) ++L.cnt[L.index(r.a) + 1];
-    if (owner[r.b] == rank) ++L.cnt[L.index(r.b) + 1];
+    if (r.oa == rank) ++L.cnt[r.ia + 1];
+    if (r.ob == rank) ++L.cnt[r.ib + 1];
   }
   for (std::size_t v = 0; v < L.owned.size(); ++v) L.cnt[v + 1] += L.cnt[v];
   L.entries.resize(static_cast<std::size_t>(L.cnt.back()));
@@ -400,8 +377,8 @@ OwnedLists neighbour_lists(GlobalId n, const std::vector<int>& owner, int rank, 
     std::vector<std::int64_t> fill(L.cnt.begin(), L.cnt.end() - 1);
     for (std::size_t t = 0; t < mine.size(); ++t) {
       const auto& r = mine[t];
-      if (owner[r.a] == rank) L.entries[fill[L.index(r.a)]++] = {r.b, static_cast<std::int64_t>(t)};
-      if (owner[r.b] == rank) L.entries[fill[L.index(r.b)]++] = {r.a, static_cast<std::int64_t>(t)};
+      if (r.oa == rank) L.entries[fill[r.ia]++] = {r.b, static_cast<std::int64_t>(t)};
+      if (r.ob == rank) L.entries[fill[r.ib]++] = {r.a, static_cast<std::int64_t>(t)};
     }
   }
   L.boundary.assign(L.owned.size(), 0);
@@ -409,7 +386,7 @@ OwnedLists neighbour_lists(GlobalId n, const std::vector<int>& owner, int rank, 
     std::sort(L.entries.begin() + L.cnt[v], L.entries.begin() + L.cnt[v + 1],
               [](const Entry& x, const Entry& y) { return x.nbr < y.nbr; });
     for (auto k = L.cnt[v]; k < L.cnt[v + 1]; ++k)
-      if (owner[L.entries[k].nbr] != rank) L.boundary[v] = 1;
+      if (L.nbr_owner(k) != rank) L.boundary[v] = 1;
   }
   return L;
 }
@@ -419,7 +396,8 @@ OwnedLists neighbour_lists(GlobalId n, const std::vector<int>& owner, int rank, 
 void rcm_groups(const OwnedLists& L, std::vector<std::int64_t> (&group)[2]) {
   // Owned-index adjacency (-1 for ghosts) and group positions for the BFS.
   std::vector<std::int64_t> nbrs(L.entries.size());
-  for (std::size_t k = 0; k < L.entries.size(); ++k) nbrs[k] = L.index(L.entries[k].nbr);
+  const int rank = L.rank;
+  for (std::size_t k = 0; k < L.entries.size(); ++k) nbrs[k] = L.nbr_owner(k) == rank ? L.nbr_index(k) : -1;
   std::vector<std::int64_t> pos(L.owned.size(), -1);
   std::vector<std::int64_t> seeds;
   for (int gi : {1, 0}) {  // the boundary first: its order seeds the interior's
@@ -449,14 +427,19 @@ std::vector<std::int64_t> local_order(const OwnedLists& L, LocalOrdering orderin
 
 // Step 4: the ghosts, by (owner, gid) so that each neighbour rank's slots are
 // contiguous.
-std::vector<GlobalId> ghost_nodes(const OwnedLists& L, const std::vector<int>& owner, int rank) {
-  std::vector<GlobalId> ghosts;
-  for (const auto& en : L.entries)
-    if (owner[en.nbr] != rank) ghosts.push_back(en.nbr);
-  std::sort(ghosts.begin(), ghosts.end(), [&](GlobalId x, GlobalId y) {
-    return owner[x] != owner[y] ? owner[x] < owner[y] : x < y;
-  });
-  ghosts.erase(std::unique(ghosts.begin(), ghosts.end()), ghosts.end());
+struct Ghost {
+  std::int32_t owner, index;  // the owner and its index there (OwnerDirectory::Slot)
+  GlobalId g;
+};
+
+std::vector<Ghost> ghost_nodes(const OwnedLists& L, int rank) {
+  std::vector<Ghost> ghosts;
+  for (std::size_t k = 0; k < L.entries.size(); ++k)
+    if (L.nbr_owner(k) != rank) ghosts.push_back({L.nbr_owner(k), L.nbr_index(k), L.entries[k].nbr});
+  std::sort(ghosts.begin(), ghosts.end(),
+            [](const Ghost& x, const Ghost& y) { return x.owner != y.owner ? x.owner < y.owner : x.g < y.g; });
+  ghosts.erase(std::unique(ghosts.begin(), ghosts.end(), [](const Ghost& x, const Ghost& y) { return x.g == y.g; }),
+               ghosts.end());
   if (L.owned.size() + ghosts.size() > static_cast<std::size_t>(std::numeric_limits<LocalId>::max()))
     throw Error("too many local nodes on one rank for 32-bit local ids; use more ranks");
   return ghosts;
@@ -474,7 +457,7 @@ struct LocalIds {
 
 // Step 4 (cont.): local ids: owned nodes in `order`, then the ghosts; fills
 // the graph's local_to_global and owned_sorted.
-LocalIds number_nodes(const OwnedLists& L, const std::vector<std::int64_t>& order, const std::vector<GlobalId>& ghosts,
+LocalIds number_nodes(const OwnedLists& L, const std::vector<std::int64_t>& order, const std::vector<Ghost>& ghosts,
                       std::vector<GlobalId>& local_to_global, std::vector<std::pair<GlobalId, LocalId>>& owned_sorted) {
   const std::size_t n_owned = L.owned.size();
   LocalIds ids;
@@ -484,12 +467,12 @@ LocalIds number_nodes(const OwnedLists& L, const std::vector<std::int64_t>& orde
     local_to_global[l] = L.owned[order[l]];
     ids.owned_to_local[order[l]] = static_cast<LocalId>(l);
   }
-  for (std::size_t t = 0; t < ghosts.size(); ++t) local_to_global[n_owned + t] = ghosts[t];
+  for (std::size_t t = 0; t < ghosts.size(); ++t) local_to_global[n_owned + t] = ghosts[t].g;
   owned_sorted.resize(n_owned);
   for (std::size_t v = 0; v < n_owned; ++v) owned_sorted[v] = {L.owned[v], ids.owned_to_local[v]};
   ids.ghost_sorted.resize(ghosts.size());
   for (std::size_t t = 0; t < ghosts.size(); ++t)
-    ids.ghost_sorted[t] = {ghosts[t], static_cast<LocalId>(n_owned + t)};
+    ids.ghost_sorted[t] = {ghosts[t].g, static_cast<LocalId>(n_owned + t)};
   std::sort(ids.ghost_sorted.begin(), ids.ghost_sorted.end());
   return ids;
 }
@@ -497,7 +480,7 @@ LocalIds number_nodes(const OwnedLists& L, const std::vector<std::int64_t>& orde
 // Step 5: the CSR in local order, neighbours in global-id order, with the
 // edges' values.
 void fill_csr(const OwnedLists& L, const std::vector<std::int64_t>& order, const LocalIds& ids,
-              const std::vector<int>& owner, int rank, const std::vector<double>& mine_vals, int width,
+              int rank, const std::vector<double>& mine_vals, int width,
               std::vector<std::int64_t>& offsets, std::vector<LocalId>& adjacency, std::vector<double>& values) {
   offsets.assign(L.owned.size() + 1, 0);
   adjacency.resize(L.entries.size());
@@ -507,7 +490,7 @@ void fill_csr(const OwnedLists& L, const std::vector<std::int64_t>& order, const
     const auto v = order[l];
     for (auto k = L.cnt[v]; k < L.cnt[v + 1]; ++k, ++pos) {
       const GlobalId g = L.entries[k].nbr;
-      adjacency[pos] = owner[g] == rank ? ids.owned_to_local[L.index(g)] : ids.ghost(g);
+      adjacency[pos] = L.nbr_owner(k) == rank ? ids.owned_to_local[L.nbr_index(k)] : ids.ghost(g);
       for (int c = 0; c < width; ++c) values[pos * width + c] = mine_vals[L.entries[k].src * width + c];
     }
     offsets[l + 1] = pos;
@@ -516,12 +499,12 @@ void fill_csr(const OwnedLists& L, const std::vector<std::int64_t>& order, const
 
 // Step 6: the halo plan. Each owner is told which of its nodes we need, in
 // our ghost order (one all-to-all of the request lists); what the others ask
-// of us becomes our send lists.
-HaloPlan make_halo(MPI_Comm comm, const std::vector<int>& owner, const std::vector<GlobalId>& ghosts,
-                   const OwnedLists& L, const LocalIds& ids, int halo_width) {
+// of us becomes our send lists. Requests name the owner-side index.
+HaloPlan make_halo(MPI_Comm comm, const std::vector<Ghost>& ghosts, const OwnedLists& L, const LocalIds& ids,
+                   int halo_width) {
   const int size = comm_size(comm);
   std::vector<std::vector<GlobalId>> requests(size);
-  for (GlobalId g : ghosts) requests[owner[g]].push_back(g);
+  for (const Ghost& h : ghosts) requests[h.owner].push_back(h.index);
   std::vector<int> nbr_ranks;
   std::vector<LocalId> recv_offset, recv_count;
   LocalId off = 0;
@@ -546,7 +529,7 @@ HaloPlan make_halo(MPI_Comm comm, const std::vector<int>& owner, const std::vect
     const auto k = static_cast<std::size_t>(asked[p++]);
     if (k > 0) {
       std::vector<LocalId> sids(k);
-      for (std::size_t t = 0; t < k; ++t) sids[t] = ids.owned_to_local[L.index(asked[p + t])];
+      for (std::size_t t = 0; t < k; ++t) sids[t] = ids.owned_to_local[static_cast<std::size_t>(asked[p + t])];
       senders.push_back(r);
       send_ids.push_back(std::move(sids));
     }
@@ -562,24 +545,36 @@ HaloPlan make_halo(MPI_Comm comm, const std::vector<int>& owner, const std::vect
 
 DistGraph::DistGraph(MPI_Comm comm, GlobalId n, const std::vector<int>& owner, const std::vector<GlobalId>& edges,
                      const std::vector<double>& edge_values, int width, int halo_width, LocalOrdering ordering)
-    : comm_(comm), n_global_(n), width_(width) {
+    : DistGraph(comm, OwnerDirectory::from_dense(comm, n, owner), edges, edge_values, width, halo_width, ordering) {}
+
+DistGraph::DistGraph(MPI_Comm comm, const OwnerDirectory& owners, const std::vector<GlobalId>& edges,
+                     const std::vector<double>& edge_values, int width, int halo_width, LocalOrdering ordering)
+    : comm_(comm), n_global_(owners.num_global()), width_(width) {
   const MPI_Comm gc = comm_.get();  // the graph's own duplicate (halo traffic apart from the caller's)
   const int rank = comm_rank(gc);
   PhaseClock clock(build_phases_);
   std::vector<EdgeRec> mine;
   std::vector<double> mine_vals;
-  route_edges(gc, owner, edges, edge_values, width, mine, mine_vals);
+  long long cut = route_edges(gc, owners, edges, edge_values, width, mine, mine_vals), gcut = 0;
+  MPI_Allreduce(&cut, &gcut, 1, MPI_LONG_LONG, MPI_SUM, gc);
+  edge_cut_ = gcut;
   clock.done("exchange");
-  const OwnedLists lists = neighbour_lists(n, owner, rank, mine);
+  const OwnedLists lists = neighbour_lists(owners, rank, mine);
   clock.done("lists");
   const std::vector<std::int64_t> order = local_order(lists, ordering, n_interior_);
   clock.done("order");
   n_owned_ = static_cast<LocalId>(lists.owned.size());
-  const std::vector<GlobalId> ghosts = ghost_nodes(lists, owner, rank);
+  const std::vector<Ghost> ghosts = ghost_nodes(lists, rank);
   const LocalIds ids = number_nodes(lists, order, ghosts, local_to_global_, owned_sorted_);
-  fill_csr(lists, order, ids, owner, rank, mine_vals, width, offsets_, adjacency_, edge_values_);
+  fill_csr(lists, order, ids, rank, mine_vals, width, offsets_, adjacency_, edge_values_);
   clock.done("csr");
-  halo_ = make_halo(gc, owner, ghosts, lists, ids, halo_width);
+  // The build's temporaries at their largest (edge records, lists, ghosts).
+  build_peak_bytes_ = static_cast<std::int64_t>(
+      mine.capacity() * sizeof(EdgeRec) + mine_vals.capacity() * sizeof(double) +
+      lists.entries.capacity() * sizeof(Entry) + (lists.cnt.capacity() + lists.owned.capacity()) * 8 +
+      ghosts.capacity() * sizeof(Ghost) + ids.ghost_sorted.capacity() * sizeof(ids.ghost_sorted[0]) +
+      ids.owned_to_local.capacity() * sizeof(LocalId) + order.capacity() * 8);
+  halo_ = make_halo(gc, ghosts, lists, ids, halo_width);
   clock.done("halo");
 }
 

@@ -21,17 +21,16 @@ struct AnchorEdgeRec {
   double r, s;
 };
 
-// Union-find with path halving, for the connectivity report on rank 0.
+// Union-find with path halving over indices 0..n-1 (T: int32 or int64).
+template <class T>
 struct DisjointSets {
-  std::vector<GlobalId> parent;
-  explicit DisjointSets(GlobalId n) : parent(static_cast<std::size_t>(n)) {
-    std::iota(parent.begin(), parent.end(), GlobalId(0));
-  }
-  GlobalId find(GlobalId x) {
+  std::vector<T> parent;
+  explicit DisjointSets(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), T(0)); }
+  T find(T x) {
     while (parent[x] != x) x = parent[x] = parent[parent[x]];
     return x;
   }
-  void unite(GlobalId a, GlobalId b) {
+  void unite(T a, T b) {
     a = find(a);
     b = find(b);
     if (a != b) parent[std::max(a, b)] = std::min(a, b);
@@ -75,8 +74,10 @@ bool any_rank(MPI_Comm comm, bool mine) {
   return out != 0;
 }
 
-// Step 1: merge duplicates. Every measurement goes to the block owner of its
-// smaller sensor id, where all copies of a pair meet; rep gets the counts.
+// Step 1: merge duplicates. Every measurement goes to the block owner of one
+// of its two sensors, chosen by a hash of the pair, where all copies of the
+// pair meet; rep gets the counts. (The smaller id would load rank r with
+// (2(P - r) - 1)/P^2 of the pairs: rank 0 with twice the mean.)
 Measurements merge_measurements(MPI_Comm comm, const Network& slab, ProblemReport& rep) {
   const int size = comm_size(comm);
   const GlobalId n = slab.num_sensors;
@@ -88,7 +89,10 @@ Measurements merge_measurements(MPI_Comm comm, const Network& slab, ProblemRepor
     GlobalId a = slab.sensor_edges[2 * e], b = slab.sensor_edges[2 * e + 1];
     if (a > b) std::swap(a, b);
     const double sg = slab.sensor_sigmas.empty() ? 0.0 : slab.sensor_sigmas[e];
-    out[block_owner(n, size, a)].push_back({a, b, slab.sensor_ranges[e], sg});
+    const GlobalId key = (mix64(static_cast<std::uint64_t>(a) * 0x9e3779b97f4a7c15ULL ^ static_cast<std::uint64_t>(b)) & 1)
+                             ? b
+                             : a;
+    out[block_owner(n, size, key)].push_back({a, b, slab.sensor_ranges[e], sg});
   }
   auto got = exchange_records(comm, out);
   test_fail_point("alloc");  // fault-injection tests: one rank runs out of memory between collectives
@@ -130,23 +134,52 @@ Measurements merge_measurements(MPI_Comm comm, const Network& slab, ProblemRepor
   return m;
 }
 
-// Step 2: connectivity and anchoring on rank 0 (union-find over all edges):
-// per global sensor, 1 if its component has no anchor measurement; on every rank.
-std::vector<std::uint8_t> unanchored_flags(MPI_Comm comm, GlobalId n, const Measurements& m) {
-  std::vector<GlobalId> all = gather_to_root(comm, m.sedges);
-  std::vector<GlobalId> anchored_ids;
-  for (std::size_t e = 0; e < m.aedges.size(); e += 2) anchored_ids.push_back(m.aedges[e]);
-  std::vector<GlobalId> all_anchored = gather_to_root(comm, anchored_ids);
-  std::vector<std::uint8_t> unanchored(static_cast<std::size_t>(n), 0);
+// Rank 0's part of unanchored_owned. Every rank's message is [number of
+// pairs, pairs (a, b) of component labels joined by a cut edge, then (label,
+// anchored) for each of its n_mine components with ghosts]. Union-find over
+// the labels seen; each rank gets, for its listed components in order,
+// whether their joined component has an anchor measurement. O(edge cut + ranks).
+std::vector<std::uint8_t> join_components(MPI_Comm comm, const std::vector<GlobalId>& msg, int n_mine) {
+  const int size = comm_size(comm);
+  const std::vector<GlobalId> all = gather_to_root(comm, msg);
+  std::vector<int> counts(size, 0), displs(size, 0);
+  MPI_Gather(&n_mine, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, comm);
+  std::vector<std::uint8_t> answers;
   if (comm_rank(comm) == 0) {
-    DisjointSets ds(n);
-    for (std::size_t e = 0; e < all.size(); e += 2) ds.unite(all[e], all[e + 1]);
-    std::vector<std::uint8_t> root_anchored(static_cast<std::size_t>(n), 0);
-    for (GlobalId i : all_anchored) root_anchored[ds.find(i)] = 1;
-    for (GlobalId i = 0; i < n; ++i) unanchored[i] = root_anchored[ds.find(i)] ? 0 : 1;
+    std::vector<GlobalId> labels;
+    for (std::size_t p = 0, q = 0; q < static_cast<std::size_t>(size); ++q) {
+      const auto np = static_cast<std::size_t>(all[p]);
+      labels.insert(labels.end(), all.begin() + p + 1, all.begin() + p + 1 + 2 * np);
+      for (int t = 0; t < counts[q]; ++t) labels.push_back(all[p + 1 + 2 * np + 2 * t]);
+      p += 1 + 2 * np + 2 * static_cast<std::size_t>(counts[q]);
+    }
+    std::sort(labels.begin(), labels.end());
+    labels.erase(std::unique(labels.begin(), labels.end()), labels.end());
+    auto idx = [&](GlobalId l) { return std::lower_bound(labels.begin(), labels.end(), l) - labels.begin(); };
+    DisjointSets<std::int64_t> ds(labels.size());
+    std::vector<std::uint8_t> root_anchored(labels.size(), 0);
+    for (int pass = 0; pass < 2; ++pass)  // unite every pair first, then collect the anchored flags
+      for (std::size_t p = 0, q = 0; q < static_cast<std::size_t>(size); ++q) {
+        const auto np = static_cast<std::size_t>(all[p]);
+        for (std::size_t t = 0; t < np && pass == 0; ++t)
+          ds.unite(idx(all[p + 1 + 2 * t]), idx(all[p + 2 + 2 * t]));
+        for (int t = 0; t < counts[q] && pass == 1; ++t) {
+          const std::size_t at = p + 1 + 2 * np + 2 * static_cast<std::size_t>(t);
+          if (all[at + 1]) root_anchored[ds.find(idx(all[at]))] = 1;
+        }
+        p += 1 + 2 * np + 2 * static_cast<std::size_t>(counts[q]);
+      }
+    for (std::size_t p = 0, q = 0; q < static_cast<std::size_t>(size); ++q) {
+      const auto np = static_cast<std::size_t>(all[p]);
+      for (int t = 0; t < counts[q]; ++t)
+        answers.push_back(root_anchored[ds.find(idx(all[p + 1 + 2 * np + 2 * static_cast<std::size_t>(t)]))]);
+      p += 1 + 2 * np + 2 * static_cast<std::size_t>(counts[q]);
+    }
+    for (int q = 1; q < size; ++q) displs[q] = displs[q - 1] + counts[q - 1];
   }
-  bcast_bytes(comm, unanchored.data(), unanchored.size());
-  return unanchored;
+  std::vector<std::uint8_t> mine(static_cast<std::size_t>(n_mine));
+  MPI_Scatterv(answers.data(), counts.data(), displs.data(), MPI_UINT8_T, mine.data(), n_mine, MPI_UINT8_T, 0, comm);
+  return mine;
 }
 
 // Total and largest ghost count over the ranks, into the partition report.
@@ -192,49 +225,59 @@ void LocalizationProblem::build(MPI_Comm comm, const Network& slab, PartitionMet
   SetupClock clock(rep.setup_phases);
   Measurements m = merge_measurements(comm, slab, rep);
   clock.done("merge");
-  const std::vector<std::uint8_t> unanchored = unanchored_flags(comm, n, m);
-  clock.done("connectivity");
-  // 3. Partition and distribute the sensor graph; ranges ride along as edge data.
-  const std::vector<int> owner = partition_graph(comm, n, m.sedges, method, &rep.partition);
+  rep.setup_bytes.emplace_back(
+      "measurements", static_cast<std::int64_t>((m.sedges.capacity() + m.aedges.capacity()) * sizeof(GlobalId) +
+                                                (m.sranges.capacity() + m.aranges.capacity()) * sizeof(double)));
+  // 2. Partition and distribute the sensor graph; ranges ride along as edge
+  // data. The owners stay distributed (OwnerDirectory): nothing of size n.
+  const OwnerDirectory owners = partition_nodes(comm, n, m.sedges, method, &rep.partition);
   clock.done("partition");
   for (const auto& ph : rep.partition.phases) rep.setup_phases.emplace_back("partition." + ph.first, ph.second);
+  rep.setup_bytes.emplace_back("partition", rep.partition.peak_bytes);
+  rep.setup_bytes.emplace_back("directory", owners.memory_bytes());
   if (m.has_ssigmas) {  // sigmas ride along as a second column, then move to their own array
     std::vector<double> vals(2 * m.sranges.size());
     for (std::size_t e = 0; e < m.sranges.size(); ++e) {
       vals[2 * e] = m.sranges[e];
       vals[2 * e + 1] = m.ssigmas[e];
     }
-    graph_ = DistGraph(comm, n, owner, m.sedges, vals, 2, std::max(dim_, 2));
+    graph_ = DistGraph(comm, owners, m.sedges, vals, 2, std::max(dim_, 2));
     sensor_sigmas_ = graph_.take_last_edge_column();
     has_sensor_sigmas_ = true;
   } else {
-    graph_ = DistGraph(comm, n, owner, m.sedges, m.sranges, 1, std::max(dim_, 2));
+    graph_ = DistGraph(comm, owners, m.sedges, m.sranges, 1, std::max(dim_, 2));
   }
   clock.done("graph");
   for (const auto& ph : graph_.build_phases()) rep.setup_phases.emplace_back("graph." + ph.first, ph.second);
+  rep.setup_bytes.emplace_back("graph_build", graph_.build_peak_bytes());
+  rep.partition.edge_cut = graph_.edge_cut();
   m.sedges.clear();
   m.sedges.shrink_to_fit();
   m.sranges.clear();
   m.sranges.shrink_to_fit();
   count_ghosts(comm, graph_, rep.partition);
   has_anchor_sigmas_ = m.has_asigmas;
-  distribute_anchors(comm, owner, m.aedges, m.aranges, m.asigmas);
+  distribute_anchors(comm, owners, m.aedges, m.aranges, m.asigmas);
   read_owned_rows(comm, slab);
+  clock.done("anchors");
+  const std::vector<std::uint8_t> unanchored = unanchored_owned(comm);
+  clock.done("connectivity");
   flag_sensors(comm, unanchored, rep);
   delta_max_ = graph_.max_degree();
-  clock.done("anchors_flags");
+  clock.done("flags");
   if (report) *report = rep;
 }
 
 // Step 4: anchor measurements to the owners of their sensors, sorted by
-// (local sensor, anchor id).
-void LocalizationProblem::distribute_anchors(MPI_Comm comm, const std::vector<int>& owner,
+// (local sensor, anchor id). They sit on the block holder of their sensor
+// (merge_measurements), whose directory slots name the owners.
+void LocalizationProblem::distribute_anchors(MPI_Comm comm, const OwnerDirectory& owners,
                                              const std::vector<GlobalId>& aedges, const std::vector<double>& aranges,
                                              const std::vector<double>& asigmas) {
   const LocalId n_owned = graph_.num_owned();
   std::vector<std::vector<AnchorEdgeRec>> out(comm_size(comm));
   for (std::size_t e = 0; 2 * e < aedges.size(); ++e)
-    out[owner[aedges[2 * e]]].push_back(
+    out[owners.local(aedges[2 * e]).owner].push_back(
         {aedges[2 * e], aedges[2 * e + 1], aranges[e], asigmas.empty() ? 0.0 : asigmas[e]});
   auto got = exchange_records(comm, out);
   std::vector<std::pair<LocalId, std::size_t>> keyed(got.size());
@@ -270,6 +313,65 @@ void LocalizationProblem::read_owned_rows(MPI_Comm comm, const Network& slab) {
   }
 }
 
+// Step 5b: per owned sensor, 1 if its connected component has no anchor
+// measurement. Union-find over the owned subgraph on each rank; components
+// that reach other ranks are then joined on rank 0 over the cut edges only
+// (O(edge cut + ranks), nothing of size n): the labels of the ghosts come by
+// one halo exchange, rank 0 gets (label, label) pairs and the anchored flags
+// of the components that have ghosts, and answers per component.
+std::vector<std::uint8_t> LocalizationProblem::unanchored_owned(MPI_Comm comm) {
+  const LocalId n_owned = graph_.num_owned();
+  const auto& off = graph_.offsets();
+  const auto& adj = graph_.adjacency();
+  DisjointSets<LocalId> ds(static_cast<std::size_t>(n_owned));
+  for (LocalId v = 0; v < n_owned; ++v)
+    for (auto e = off[v]; e < off[v + 1]; ++e)
+      if (adj[e] < n_owned) ds.unite(v, adj[e]);
+  std::vector<LocalId> comp(static_cast<std::size_t>(n_owned));
+  std::vector<std::int64_t> comp_of_root(static_cast<std::size_t>(n_owned), -1);
+  std::int64_t ncomp = 0;
+  for (LocalId v = 0; v < n_owned; ++v) {
+    const LocalId r = ds.find(v);
+    if (comp_of_root[r] < 0) comp_of_root[r] = ncomp++;
+    comp[v] = static_cast<LocalId>(comp_of_root[r]);
+  }
+  comp_of_root = {};
+  ds = DisjointSets<LocalId>(0);
+  std::vector<std::uint8_t> anchored(static_cast<std::size_t>(ncomp), 0), remote(static_cast<std::size_t>(ncomp), 0);
+  for (LocalId v = 0; v < n_owned; ++v)
+    if (anchor_offsets_[v + 1] > anchor_offsets_[v]) anchored[comp[v]] = 1;
+  long long first = 0;
+  MPI_Exscan(&ncomp, &first, 1, MPI_LONG_LONG, MPI_SUM, comm);
+  if (comm_rank(comm) == 0) first = 0;
+  // Global labels (exact in doubles below 2^53) of owned nodes, then ghosts'.
+  std::vector<double> label(static_cast<std::size_t>(graph_.num_local()), 0.0);
+  for (LocalId v = 0; v < n_owned; ++v) label[v] = static_cast<double>(first + comp[v]);
+  graph_.halo().exchange(label.data(), 1);
+  std::vector<GlobalId> msg;  // pairs (own label, ghost label), then (label, anchored) of the components with ghosts
+  for (LocalId v = graph_.num_interior(); v < n_owned; ++v)
+    for (auto e = off[v]; e < off[v + 1]; ++e)
+      if (adj[e] >= n_owned) {
+        remote[comp[v]] = 1;
+        msg.push_back(first + comp[v]);
+        msg.push_back(static_cast<GlobalId>(label[adj[e]]));
+      }
+  label = {};
+  const std::int64_t n_pairs = static_cast<std::int64_t>(msg.size() / 2);
+  std::vector<GlobalId> mine_remote;
+  for (std::int64_t c = 0; c < ncomp; ++c)
+    if (remote[c]) {
+      mine_remote.push_back(first + c);
+      msg.push_back(first + c);
+      msg.push_back(anchored[c]);
+    }
+  msg.insert(msg.begin(), n_pairs);
+  const std::vector<std::uint8_t> answer = join_components(comm, msg, static_cast<int>(mine_remote.size()));
+  for (std::size_t t = 0; t < mine_remote.size(); ++t) anchored[mine_remote[t] - first] = answer[t];
+  std::vector<std::uint8_t> un(static_cast<std::size_t>(n_owned));
+  for (LocalId v = 0; v < n_owned; ++v) un[v] = anchored[comp[v]] ? 0 : 1;
+  return un;
+}
+
 // Step 6: flags of sensors that cannot be localized (no anchored component,
 // fewer than p + 1 measurements), their counts and a sample into rep, and
 // the largest anchor degree.
@@ -280,7 +382,7 @@ void LocalizationProblem::flag_sensors(MPI_Comm comm, const std::vector<std::uin
   for (LocalId v = 0; v < graph_.num_owned(); ++v) {
     const auto na = anchor_offsets_[v + 1] - anchor_offsets_[v];
     maxa = std::max(maxa, static_cast<int>(na));
-    if (unanchored[graph_.global_id(v)]) {
+    if (unanchored[v]) {
       flags_[v] |= kUnanchoredComponent;
       ++cnt[0];
     }

@@ -1,6 +1,6 @@
 // The solver driver (src/solvers/solver.cpp): bit-identical positions of every
-// algorithm for 1, 2 and 3 ranks (sub-communicators of this run), metis and
-// block partitions, SIMD and scalar kernels; the stopping rule and history;
+// algorithm for 1, 2 and 3 ranks (sub-communicators of this run), metis,
+// parmetis and block partitions, SIMD and scalar kernels; the stopping rule and history;
 // option validation.
 #include <gtest/gtest.h>
 #include <mpi.h>
@@ -43,6 +43,39 @@ TEST(Determinism, BitIdenticalForOneTwoThreeRanks) {
         MPI_Comm_free(&sub);
       }
     }
+  }
+}
+
+// The ParMETIS partition (PT-Scotch's, which may differ between runs) gives
+// the same bits as METIS on one rank: the iterates do not depend on the partition.
+TEST(Determinism, ParMetisPartitionGivesMetisBits) {
+  if (!parmetis_available()) GTEST_SKIP() << "built without PT-Scotch's ParMETIS interface";
+  const Network w = make_network({.n = 120, .dim = 2, .radius = 0.2, .anchor_radius = 0.3, .sigma = 0.05});
+  const std::vector<std::string> algs = {"pipeline", "mm", "async-exact"};
+  std::vector<std::vector<double>> ref;
+  for (const auto& alg : algs) ref.push_back(run(MPI_COMM_SELF, w, alg, 40, PartitionMethod::kMetis));
+  for (int k = 2; k <= world_size(); ++k) {
+    MPI_Comm sub;
+    MPI_Comm_split(MPI_COMM_WORLD, world_rank() < k ? 0 : MPI_UNDEFINED, world_rank(), &sub);
+    if (sub == MPI_COMM_NULL) continue;
+    ProblemReport rep;  // one partition per rank count (PT-Scotch is the slow part)
+    LocalizationProblem prob(sub, slab_of(w, sub), PartitionMethod::kParMetis, &rep);
+    EXPECT_EQ(rep.partition.method, "parmetis") << rep.partition.note;
+    for (std::size_t a = 0; a < algs.size(); ++a) {
+      SolverOptions opt;
+      opt.algorithm = algs[a];
+      opt.max_iter = 40;
+      opt.tol = 0;
+      opt.history_every = 1000000;
+      Solver solver(prob, opt);
+      std::vector<double> x;
+      solver.solve(random_initial_positions(prob, 3), &x);
+      const auto xg = allgather_positions(prob, x);
+      ASSERT_EQ(xg.size(), ref[a].size());
+      EXPECT_EQ(0, std::memcmp(xg.data(), ref[a].data(), xg.size() * sizeof(double)))
+          << algs[a] << " with parmetis on " << k << " ranks differs from metis on one";
+    }
+    MPI_Comm_free(&sub);
   }
 }
 

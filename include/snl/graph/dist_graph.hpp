@@ -15,11 +15,20 @@
 
 namespace snl {
 
-enum class PartitionMethod { kMetis, kBlock };
-PartitionMethod parse_partition_method(const std::string& s);  // "metis" | "block"
+enum class PartitionMethod { kMetis, kBlock, kParMetis, kAuto };
+/// "metis" | "parmetis" | "block" | "auto" (see resolve_partition_method).
+PartitionMethod parse_partition_method(const std::string& s);
+/// Whether this build has the ParMETIS interface (PT-Scotch's) for kParMetis.
+bool parmetis_available();
+/// kAuto by the measured rule (docs/performance.md, "Parallel partitioning"):
+/// parmetis when the ranks span more than one node or the graph has more
+/// than kAutoParMetisNodes nodes (and the build has it), else metis.
+/// Collective (it counts the nodes). Other methods are returned unchanged.
+constexpr GlobalId kAutoParMetisNodes = 4000000;
+PartitionMethod resolve_partition_method(MPI_Comm comm, GlobalId n, PartitionMethod method);
 
 struct PartitionStats {
-  std::string method;          ///< what was actually used ("metis" or "block")
+  std::string method;          ///< what was actually used ("metis", "parmetis" or "block")
   std::string note;            ///< why a fallback happened, if it did
   GlobalId edge_cut = 0;       ///< undirected edges whose ends live on different ranks
   double imbalance = 1.0;      ///< max owned / mean owned
@@ -27,21 +36,70 @@ struct PartitionStats {
   GlobalId max_ghosts = 0;
   double seconds = 0.0;
   /// Seconds of its phases on this rank: gather (the edge lists to rank 0),
-  /// metis_graph (METIS's CSR), metis (the call), bcast (the owners), stats.
+  /// metis_graph (METIS's CSR), metis (the call), scatter (the owners),
+  /// or parmetis_graph and parmetis; stats.
   std::vector<std::pair<std::string, double>> phases;
+  /// Bytes of the largest partitioner structures on this rank (METIS's or
+  /// ParMETIS's graph, the gathered edges, the owner array on rank 0).
+  std::int64_t peak_bytes = 0;
 };
 
-/// Collective. Owner rank of every global node, identical on every rank.
-/// `edges`: this rank's share of the undirected edges (pairs of global ids),
-/// each edge given once overall. METIS k-way runs on rank 0 (Debian's METIS has
-/// 32-bit idx_t: graphs too large for it fall back to block with a note).
+/// Distributed directory of node owners: rank r holds, for the global ids of
+/// its block (block_range(n, P, r)), each node's owner and its index among
+/// that owner's nodes in ascending global-id order. Nothing of size n on any
+/// rank; lookups are all-to-alls. Holds its own duplicate communicator.
+class OwnerDirectory {
+ public:
+  struct Slot {
+    std::int32_t owner, index;
+  };
+  OwnerDirectory() = default;
+  /// Collective. `owners`: the owner rank of each node of this rank's block.
+  OwnerDirectory(MPI_Comm comm, GlobalId n, const std::vector<int>& owners);
+  /// Collective. From every node's owner, the same vector on every rank.
+  static OwnerDirectory from_dense(MPI_Comm comm, GlobalId n, const std::vector<int>& owner);
+  MPI_Comm comm() const { return comm_.get(); }
+  GlobalId num_global() const { return n_; }
+  GlobalId block_begin() const { return begin_; }
+  GlobalId block_end() const { return begin_ + static_cast<GlobalId>(slots_.size()); }
+  /// The slot of a node of this rank's block.
+  const Slot& local(GlobalId g) const { return slots_[static_cast<std::size_t>(g - begin_)]; }
+  /// Collective: this rank's nodes in ascending global id (slot index order).
+  std::vector<GlobalId> owned_nodes() const;
+  /// Collective: nodes per rank (on every rank).
+  std::vector<GlobalId> counts() const;
+  /// Collective: every node's owner on every rank (O(n): for callers that
+  /// need it whole, e.g. the consensus solvers).
+  std::vector<int> gather_dense() const;
+  std::int64_t memory_bytes() const { return static_cast<std::int64_t>(slots_.capacity() * sizeof(Slot)); }
+
+ private:
+  DupComm comm_;
+  GlobalId n_ = 0, begin_ = 0;
+  std::vector<Slot> slots_;
+};
+
+/// Collective. The owners of the nodes as a distributed directory. `edges`:
+/// this rank's share of the undirected edges (pairs of global ids), each edge
+/// given once overall. metis: METIS k-way on rank 0 over the gathered graph
+/// (Debian's METIS has 32-bit idx_t: graphs too large for it fall back to
+/// block with a note). parmetis: ParMETIS_V3_PartKway (PT-Scotch) over the
+/// block-distributed graph, no rank holds more than its block. Stats get the
+/// imbalance; the edge cut is counted by DistGraph (DistGraph::edge_cut).
+OwnerDirectory partition_nodes(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges,
+                               PartitionMethod method, PartitionStats* stats);
+
+/// Collective. Owner rank of every global node, identical on every rank
+/// (partition_nodes gathered; stats get the edge cut as well).
 std::vector<int> partition_graph(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges,
                                  PartitionMethod method, PartitionStats* stats);
 
 /// Collective all-to-all of trivially copyable records: out[r] goes to rank r;
 /// returns what this rank received, concatenated in rank order.
+/// With `recv_counts`, how many came from each rank.
 template <class T>
-std::vector<T> exchange_records(MPI_Comm comm, const std::vector<std::vector<T>>& out);
+std::vector<T> exchange_records(MPI_Comm comm, const std::vector<std::vector<T>>& out,
+                                std::vector<int>* recv_counts = nullptr);
 
 /// Order of the owned nodes inside the interior and boundary groups.
 /// kRcm: reverse Cuthill-McKee on the owned subgraph, so that neighbours are
@@ -57,10 +115,14 @@ class DistGraph {
  public:
   DistGraph() = default;
   /// Collective. Duplicates `comm` once (freed by the destructor).
-  /// `owner`: owner rank of every global node. `edges`: this
+  /// `owners`: the owner directory (partition_nodes). `edges`: this
   /// rank's share of the undirected edges (global pairs, each edge once
   /// overall, any rank may hold any edge), with `width` doubles of data each
   /// in `edge_values`. `halo_width`: most doubles per node the halo carries.
+  DistGraph(MPI_Comm comm, const OwnerDirectory& owners, const std::vector<GlobalId>& edges,
+            const std::vector<double>& edge_values, int width, int halo_width,
+            LocalOrdering ordering = default_local_ordering());
+  /// The same from every node's owner rank (identical on every rank).
   DistGraph(MPI_Comm comm, GlobalId n, const std::vector<int>& owner, const std::vector<GlobalId>& edges,
             const std::vector<double>& edge_values, int width, int halo_width,
             LocalOrdering ordering = default_local_ordering());
@@ -101,6 +163,12 @@ class DistGraph {
   /// order, halo), for the setup report.
   const std::vector<std::pair<std::string, double>>& build_phases() const { return build_phases_; }
 
+  /// Undirected edges whose ends have different owners (same on every rank).
+  GlobalId edge_cut() const { return edge_cut_; }
+  /// Largest bytes of the constructor's temporaries on this rank (edge
+  /// records, neighbour lists), for the memory accounting.
+  std::int64_t build_peak_bytes() const { return build_peak_bytes_; }
+
   /// Bytes held by the graph's arrays (capacities), halo buffers included.
   std::int64_t memory_bytes() const;
 
@@ -114,6 +182,8 @@ class DistGraph {
   DupComm comm_;
   GlobalId n_global_ = 0;
   LocalId n_owned_ = 0, n_interior_ = 0;
+  GlobalId edge_cut_ = 0;
+  std::int64_t build_peak_bytes_ = 0;
   int width_ = 0;
   std::vector<GlobalId> local_to_global_;
   std::vector<std::pair<std::string, double>> build_phases_;
@@ -126,7 +196,7 @@ class DistGraph {
 
 // ---- template implementation ----
 template <class T>
-std::vector<T> exchange_records(MPI_Comm comm, const std::vector<std::vector<T>>& out) {
+std::vector<T> exchange_records(MPI_Comm comm, const std::vector<std::vector<T>>& out, std::vector<int>* recv_counts) {
   int size = 1;
   MPI_Comm_size(comm, &size);
   MPI_Datatype rec;
@@ -154,6 +224,7 @@ std::vector<T> exchange_records(MPI_Comm comm, const std::vector<std::vector<T>>
   std::vector<T> rbuf(static_cast<std::size_t>(rtot));
   MPI_Alltoallv(sbuf.data(), scount.data(), sdisp.data(), rec, rbuf.data(), rcount.data(), rdisp.data(), rec, comm);
   MPI_Type_free(&rec);
+  if (recv_counts) *recv_counts = std::move(rcount);
   return rbuf;
 }
 

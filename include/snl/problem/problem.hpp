@@ -26,8 +26,12 @@ struct ProblemReport {
   GlobalId unlocalizable = 0;       ///< sensors flagged by either test or by the file's report
   std::vector<GlobalId> unlocalizable_sample;  ///< the first (up to 20) such ids
   /// Setup time by phase (rank 0's clock, after a barrier-free pass): merge,
-  /// connectivity, partition, graph (with the graph's own phases), anchors.
+  /// partition, graph (with the graph's own phases), anchors, connectivity.
   std::vector<std::pair<std::string, double>> setup_phases;
+  /// This rank's accounting of the setup's largest structures, in bytes:
+  /// measurements (after merging), partition (the partitioner's graph),
+  /// directory (the owner directory), graph_build (DistGraph's temporaries).
+  std::vector<std::pair<std::string, std::int64_t>> setup_bytes;
 };
 
 class LocalizationProblem {
@@ -90,9 +94,10 @@ class LocalizationProblem {
  private:
   // The constructor's steps (problem.cpp), in this order.
   void build(MPI_Comm comm, const Network& slab, PartitionMethod method, ProblemReport* report);
-  void distribute_anchors(MPI_Comm comm, const std::vector<int>& owner, const std::vector<GlobalId>& aedges,
+  void distribute_anchors(MPI_Comm comm, const OwnerDirectory& owners, const std::vector<GlobalId>& aedges,
                           const std::vector<double>& aranges, const std::vector<double>& asigmas);
   void read_owned_rows(MPI_Comm comm, const Network& slab);
+  std::vector<std::uint8_t> unanchored_owned(MPI_Comm comm);
   void flag_sensors(MPI_Comm comm, const std::vector<std::uint8_t>& unanchored, ProblemReport& rep);
   int dim_ = 2;
   DistGraph graph_;

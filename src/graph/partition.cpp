@@ -1,0 +1,353 @@
+// Partitioning (METIS on rank 0, ParMETIS through PT-Scotch, block) and the
+// distributed owner directory that DistGraph builds from.
+#include <metis.h>
+
+#include <algorithm>
+#include <limits>
+#include <numeric>
+
+#include "snl/core/mpi_util.hpp"
+#include "snl/graph/dist_graph.hpp"
+#include "snl/io/network.hpp"
+
+#ifdef SNL_HAVE_PARMETIS
+#define SCOTCH_METIS_RETURN  // METIS_OK etc. come from metis.h (the same values)
+#include <parmetis.h>  // PT-Scotch's compatibility header: idx_t is SCOTCH_Num, real_t is float
+#endif
+
+namespace snl {
+
+PartitionMethod parse_partition_method(const std::string& s) {
+  if (s == "metis") return PartitionMethod::kMetis;
+  if (s == "block") return PartitionMethod::kBlock;
+  if (s == "parmetis") return PartitionMethod::kParMetis;
+  if (s == "auto") return PartitionMethod::kAuto;
+  throw Error("unknown partition method '" + s + "' (expected auto, metis, parmetis or block)");
+}
+
+bool parmetis_available() {
+#ifdef SNL_HAVE_PARMETIS
+  return true;
+#else
+  return false;
+#endif
+}
+
+namespace {
+// Number of shared-memory nodes the ranks of comm run on.
+int count_nodes(MPI_Comm comm) {
+  MPI_Comm local;
+  MPI_Comm_split_type(comm, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, &local);
+  const int leader = comm_rank(local) == 0 ? 1 : 0;
+  MPI_Comm_free(&local);
+  int nodes = 0;
+  MPI_Allreduce(&leader, &nodes, 1, MPI_INT, MPI_SUM, comm);
+  return nodes;
+}
+}  // namespace
+
+PartitionMethod resolve_partition_method(MPI_Comm comm, GlobalId n, PartitionMethod method) {
+  if (method != PartitionMethod::kAuto) return method;
+  if (!parmetis_available()) return PartitionMethod::kMetis;
+  const bool big = n > kAutoParMetisNodes;
+  return (big || count_nodes(comm) > 1) ? PartitionMethod::kParMetis : PartitionMethod::kMetis;
+}
+
+// ---- OwnerDirectory ----
+
+OwnerDirectory::OwnerDirectory(MPI_Comm comm, GlobalId n, const std::vector<int>& owners) : comm_(comm), n_(n) {
+  const MPI_Comm c = comm_.get();
+  const int size = comm_size(c);
+  GlobalId e;
+  block_range(n, size, comm_rank(c), begin_, e);
+  if (static_cast<GlobalId>(owners.size()) != e - begin_) throw Error("internal error: owner block of wrong size");
+  // A node's index on its owner: the owner's nodes in lower blocks (an
+  // exclusive scan of the per-owner counts, O(P) per rank) plus its rank
+  // among the owner's nodes of this block.
+  std::vector<long long> cnt(size, 0), base(size, 0);
+  for (int o : owners) ++cnt[o];
+  MPI_Exscan(cnt.data(), base.data(), size, MPI_LONG_LONG, MPI_SUM, c);
+  if (comm_rank(c) == 0) std::fill(base.begin(), base.end(), 0);  // Exscan leaves rank 0's undefined
+  slots_.resize(owners.size());
+  for (std::size_t t = 0; t < owners.size(); ++t) {
+    const int o = owners[t];
+    if (base[o] > std::numeric_limits<LocalId>::max())
+      throw Error("too many sensors on one rank for 32-bit local ids; use more ranks");
+    slots_[t] = {o, static_cast<std::int32_t>(base[o]++)};
+  }
+}
+
+OwnerDirectory OwnerDirectory::from_dense(MPI_Comm comm, GlobalId n, const std::vector<int>& owner) {
+  GlobalId b, e;
+  block_range(n, comm_size(comm), comm_rank(comm), b, e);
+  return OwnerDirectory(comm, n, std::vector<int>(owner.begin() + b, owner.begin() + e));
+}
+
+std::vector<GlobalId> OwnerDirectory::owned_nodes() const {
+  // Each block sends its nodes to their owners; blocks arrive in rank order,
+  // each ascending, so the concatenation is ascending (and slot index order).
+  std::vector<std::vector<GlobalId>> out(comm_size(comm_.get()));
+  for (std::size_t t = 0; t < slots_.size(); ++t) out[slots_[t].owner].push_back(begin_ + static_cast<GlobalId>(t));
+  return exchange_records(comm_.get(), out);
+}
+
+std::vector<GlobalId> OwnerDirectory::counts() const {
+  const int size = comm_size(comm_.get());
+  std::vector<long long> cnt(size, 0), tot(size, 0);
+  for (const Slot& s : slots_) ++cnt[s.owner];
+  MPI_Allreduce(cnt.data(), tot.data(), size, MPI_LONG_LONG, MPI_SUM, comm_.get());
+  return std::vector<GlobalId>(tot.begin(), tot.end());
+}
+
+std::vector<int> OwnerDirectory::gather_dense() const {
+  const MPI_Comm c = comm_.get();
+  const int size = comm_size(c);
+  std::vector<int> mine(slots_.size()), counts(size), displs(size);
+  for (std::size_t t = 0; t < slots_.size(); ++t) mine[t] = slots_[t].owner;
+  for (int r = 0; r < size; ++r) {
+    GlobalId b, e;
+    block_range(n_, size, r, b, e);
+    counts[r] = static_cast<int>(e - b);
+    displs[r] = static_cast<int>(b);
+  }
+  if (n_ > std::numeric_limits<int>::max()) throw Error("gather_dense: more than 2^31 nodes");
+  std::vector<int> all(static_cast<std::size_t>(n_));
+  MPI_Allgatherv(mine.data(), static_cast<int>(mine.size()), MPI_INT, all.data(), counts.data(), displs.data(), MPI_INT,
+                 c);
+  return all;
+}
+
+namespace {
+
+// Records the seconds since the previous mark under a phase name.
+struct PhaseMarks {
+  std::vector<std::pair<std::string, double>> phases;
+  double mark = MPI_Wtime();
+  void operator()(const char* name) {
+    const double now = MPI_Wtime();
+    phases.emplace_back(name, now - mark);
+    mark = now;
+  }
+};
+
+// METIS k-way on rank 0. Returns "" on success, else why it could not run.
+std::string metis_partition(GlobalId n, const std::vector<GlobalId>& edges, int nparts, std::vector<int>& owner,
+                            PhaseMarks& phase, std::int64_t& peak) {
+  const std::int64_t nnz = static_cast<std::int64_t>(edges.size());  // = 2E directed entries
+  static_assert(sizeof(idx_t) == 4 || sizeof(idx_t) == 8, "unexpected METIS idx_t");
+  const std::int64_t idx_max = std::numeric_limits<idx_t>::max();
+  if (n > idx_max || nnz > idx_max)
+    return "graph too large for this METIS build (" + std::to_string(sizeof(idx_t) * 8) + "-bit idx_t)";
+  std::vector<idx_t> xadj(static_cast<std::size_t>(n) + 1, 0), adjncy(static_cast<std::size_t>(nnz));
+  for (std::size_t e = 0; e < edges.size(); e += 2) {
+    ++xadj[edges[e] + 1];
+    ++xadj[edges[e + 1] + 1];
+  }
+  for (GlobalId v = 0; v < n; ++v) xadj[v + 1] += xadj[v];
+  {
+    std::vector<idx_t> fill(xadj.begin(), xadj.end() - 1);
+    for (std::size_t e = 0; e < edges.size(); e += 2) {
+      adjncy[fill[edges[e]]++] = static_cast<idx_t>(edges[e + 1]);
+      adjncy[fill[edges[e + 1]]++] = static_cast<idx_t>(edges[e]);
+    }
+  }
+  // Neighbours in ascending order: METIS's result depends on the order, and
+  // this one does not depend on which rank held which edge.
+  for (GlobalId v = 0; v < n; ++v) std::sort(adjncy.begin() + xadj[v], adjncy.begin() + xadj[v + 1]);
+  phase("metis_graph");
+  idx_t nvtxs = static_cast<idx_t>(n), ncon = 1, np = nparts, objval = 0;
+  idx_t options[METIS_NOPTIONS];
+  METIS_SetDefaultOptions(options);
+  options[METIS_OPTION_SEED] = 1;  // deterministic partitions
+  options[METIS_OPTION_NUMBERING] = 0;
+  std::vector<idx_t> part(static_cast<std::size_t>(n), 0);
+  // The gathered edges, METIS's CSR and part (METIS's own workspace not counted).
+  peak = nnz * 8 + static_cast<std::int64_t>((xadj.size() + adjncy.size() + part.size()) * sizeof(idx_t));
+  int status = METIS_ERROR;
+  try {
+    status = METIS_PartGraphKway(&nvtxs, &ncon, xadj.data(), adjncy.data(), nullptr, nullptr, nullptr, &np, nullptr,
+                                 nullptr, options, &objval, part.data());
+  } catch (...) {
+    status = METIS_ERROR;
+  }
+  if (status != METIS_OK) return status == METIS_ERROR_MEMORY ? "METIS ran out of memory" : "METIS failed";
+  owner.assign(part.begin(), part.end());
+  phase("metis");
+  return "";
+}
+
+// METIS on rank 0 over the gathered edge lists; each rank gets the owners of
+// its block (scatter). Collective; returns "" on success, else why not.
+std::string metis_on_root(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, std::vector<int>& block,
+                          PhaseMarks& phase, std::int64_t& peak) {
+  std::vector<GlobalId> all = gather_to_root(comm, edges);
+  phase("gather");
+  std::string why;
+  std::vector<int> owner;
+  if (comm_rank(comm) == 0) {
+    try {
+      why = metis_partition(n, all, comm_size(comm), owner, phase, peak);
+    } catch (const std::bad_alloc&) {
+      why = "out of memory building the METIS graph";
+    }
+  }
+  all.clear();
+  all.shrink_to_fit();
+  why = bcast_string(comm, why);
+  if (!why.empty()) return why;
+  const int size = comm_size(comm);
+  std::vector<int> counts(size), displs(size);
+  for (int r = 0; r < size; ++r) {
+    GlobalId b, e;
+    block_range(n, size, r, b, e);
+    counts[r] = static_cast<int>(e - b);
+    displs[r] = static_cast<int>(b);
+  }
+  block.resize(static_cast<std::size_t>(counts[comm_rank(comm)]));
+  MPI_Scatterv(owner.data(), counts.data(), displs.data(), MPI_INT, block.data(), static_cast<int>(block.size()),
+               MPI_INT, 0, comm);
+  phase("scatter");
+  return "";
+}
+
+#ifdef SNL_HAVE_PARMETIS
+// ParMETIS's idx_t in PT-Scotch's header; the CMake module picks the 64-bit build.
+using pidx_t = SCOTCH_Num;
+static_assert(sizeof(pidx_t) == 8, "PT-Scotch's ParMETIS interface must be the 64-bit build (parmetis-int64)");
+
+struct HalfEdge {
+  GlobalId v, u;
+};
+
+// ParMETIS_V3_PartKway over the block-distributed graph: each edge goes to the
+// block owners of both ends, which build their rows of the CSR. Collective;
+// returns "" on success, else why it could not run. PT-Scotch's result may
+// vary between runs (threads, message order): the iterates do not depend on it.
+std::string parmetis_partition(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges,
+                               std::vector<int>& block, PhaseMarks& phase, std::int64_t& peak) {
+  const int size = comm_size(comm), rank = comm_rank(comm);
+  GlobalId b, e;
+  block_range(n, size, rank, b, e);
+  std::vector<HalfEdge> mine;
+  {
+    std::vector<std::vector<HalfEdge>> out(size);
+    for (std::size_t k = 0; k < edges.size(); k += 2) {
+      out[block_owner(n, size, edges[k])].push_back({edges[k], edges[k + 1]});
+      out[block_owner(n, size, edges[k + 1])].push_back({edges[k + 1], edges[k]});
+    }
+    mine = exchange_records(comm, out);
+  }
+  std::vector<pidx_t> vtxdist(size + 1), xadj(static_cast<std::size_t>(e - b) + 1, 0), adjncy(mine.size());
+  for (int r = 0; r <= size; ++r) {
+    GlobalId rb, re;
+    block_range(n, size, std::min(r, size - 1), rb, re);
+    vtxdist[r] = r == size ? re : rb;
+  }
+  for (const HalfEdge& h : mine) ++xadj[h.v - b + 1];
+  for (std::size_t v = 0; v + 1 < xadj.size(); ++v) xadj[v + 1] += xadj[v];
+  {
+    std::vector<pidx_t> fill(xadj.begin(), xadj.end() - 1);
+    for (const HalfEdge& h : mine) adjncy[fill[h.v - b]++] = h.u;
+  }
+  peak = static_cast<std::int64_t>(mine.capacity() * sizeof(HalfEdge) +
+                                   (xadj.size() + adjncy.size() + vtxdist.size()) * sizeof(pidx_t));
+  mine.clear();
+  mine.shrink_to_fit();
+  phase("parmetis_graph");
+  pidx_t wgtflag = 0, numflag = 0, ncon = 1, nparts = size, edgecut = 0;
+  pidx_t options[3] = {0, 0, 0};
+  std::vector<float> tpwgts(size, 1.0f / static_cast<float>(size));
+  float ubvec = 1.03f;  // METIS's default imbalance tolerance (ufactor 30)
+  std::vector<pidx_t> part(xadj.size() - 1, 0);
+  MPI_Comm c = comm;
+  int status = METIS_ERROR;
+  try {
+    status = ParMETIS_V3_PartKway(vtxdist.data(), xadj.data(), adjncy.data(), nullptr, nullptr, &wgtflag, &numflag,
+                                  &ncon, &nparts, tpwgts.data(), &ubvec, options, &edgecut, part.data(), &c);
+  } catch (...) {
+    status = METIS_ERROR;
+  }
+  int ok = status == METIS_OK ? 1 : 0, all_ok = 0;
+  MPI_Allreduce(&ok, &all_ok, 1, MPI_INT, MPI_MIN, comm);
+  if (!all_ok) return "ParMETIS (PT-Scotch) failed";
+  block.assign(part.begin(), part.end());
+  phase("parmetis");
+  return "";
+}
+#endif
+
+// Imbalance of the partition into stats (collective).
+void partition_imbalance(const OwnerDirectory& dir, PartitionStats& stats) {
+  const std::vector<GlobalId> counts = dir.counts();
+  const double mean = static_cast<double>(dir.num_global()) / static_cast<double>(counts.size());
+  stats.imbalance = mean > 0 ? static_cast<double>(*std::max_element(counts.begin(), counts.end())) / mean : 1.0;
+}
+
+// Owners of this rank's block by `method` (one rank or a fallback: block).
+// Sets `used` and `note`.
+std::vector<int> block_owners(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, PartitionMethod method,
+                              PhaseMarks& phase, std::int64_t& peak, std::string& used, std::string& note) {
+  const int size = comm_size(comm);
+  std::vector<int> block;
+  std::string why;
+  if (method == PartitionMethod::kMetis && size > 1) {
+    why = metis_on_root(comm, n, edges, block, phase, peak);
+    if (why.empty()) used = "metis";
+  } else if (method == PartitionMethod::kParMetis && size > 1) {
+#ifdef SNL_HAVE_PARMETIS
+    // PT-Scotch needs vertices on every rank: tiny graphs go to METIS.
+    why = n >= 2 * static_cast<GlobalId>(size) ? parmetis_partition(comm, n, edges, block, phase, peak)
+                                               : metis_on_root(comm, n, edges, block, phase, peak);
+    if (why.empty()) used = n >= 2 * static_cast<GlobalId>(size) ? "parmetis" : "metis";
+#else
+    why = "this build has no ParMETIS (install libscotchparmetis-dev and libptscotch-dev, then reconfigure)";
+#endif
+  } else if (method != PartitionMethod::kBlock) {
+    used = method == PartitionMethod::kParMetis ? "parmetis" : "metis";  // one rank: the trivial partition
+  }
+  if (!why.empty()) note = why + "; used the block partition instead";
+  if (!why.empty() || block.empty()) {
+    GlobalId b, e;
+    block_range(n, size, comm_rank(comm), b, e);
+    block.assign(static_cast<std::size_t>(e - b), comm_rank(comm));
+  }
+  return block;
+}
+
+}  // namespace
+
+OwnerDirectory partition_nodes(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges,
+                               PartitionMethod method, PartitionStats* stats) {
+  const double t0 = MPI_Wtime();
+  PhaseMarks phase;
+  method = resolve_partition_method(comm, n, method);
+  std::string used = "block", note;
+  std::int64_t peak = 0;
+  const std::vector<int> block = block_owners(comm, n, edges, method, phase, peak, used, note);
+  OwnerDirectory dir(comm, n, block);
+  if (stats) {
+    stats->method = used;
+    stats->note = note;
+    stats->peak_bytes = peak;
+    partition_imbalance(dir, *stats);
+    phase("stats");
+    stats->phases = std::move(phase.phases);
+    stats->seconds = MPI_Wtime() - t0;
+  }
+  return dir;
+}
+
+std::vector<int> partition_graph(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges,
+                                 PartitionMethod method, PartitionStats* stats) {
+  const OwnerDirectory dir = partition_nodes(comm, n, edges, method, stats);
+  std::vector<int> owner = dir.gather_dense();
+  if (stats) {
+    long long cut = 0, gcut = 0;
+    for (std::size_t e = 0; e < edges.size(); e += 2) cut += owner[edges[e]] != owner[edges[e + 1]];
+    MPI_Allreduce(&cut, &gcut, 1, MPI_LONG_LONG, MPI_SUM, comm);
+    stats->edge_cut = gcut;
+  }
+  return owner;
+}
+
+}  // namespace snl
