@@ -37,7 +37,7 @@ def main():
                         continue
                     frac = 100 * sum(r["localizable_fraction"] for r in rs) / len(rs)
                     full = sum(r["not_localizable"] == 0 for r in rs)
-                    cells.append(f"{frac:.3f} [{full}/{len(rs)}]")
+                    cells.append(f"{frac:.4f} [{full}/{len(rs)}]")
                 print(f"| {d:g} | " + " | ".join(cells) + " |")
 
 

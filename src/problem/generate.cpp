@@ -422,9 +422,9 @@ std::string localizability_warning(const GenerateOptions& opt, const GenerateRep
      << lr.few_measurements.size() << " with fewer than " << opt.dim + 1 << " measurements, " << lr.not_rigid.size()
      << " in flexible parts" << (lr.rigidity_checked ? "" : " (rigidity not checked)") << ". Average degree "
      << std::setprecision(4) << rep.achieved_avg_degree << ", " << num_anchors
-     << " anchors. Raise --avg-degree (docs/generator.md; the default, " << default_avg_degree(opt.dim)
-     << ", makes networks of any size localizable but for a few sensors in 10^5), add anchors (--anchors K), or give "
-        "--localizable yes to insist.";
+     << " anchors. Raise --avg-degree (the default, " << default_avg_degree(opt.dim)
+     << ", leaves at most a few sensors in 10^4 unlocalizable at any n; docs/generator.md), add anchors (--anchors K), "
+        "or give --localizable yes to insist.";
   return os.str();
 }
 

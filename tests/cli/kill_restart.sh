@@ -6,7 +6,7 @@
 # not from scratch. A second case kills the pipeline once its checkpoint is in
 # the MM phase and checks that the restart resumes inside MM.
 source "$(dirname "$0")/common.bash"
-"$SNL" generate -o "$T/net.h5" --sensors 3000 --avg-degree 7 --sigma 0.05 --seed 5 -q
+"$SNL" generate -o "$T/net.h5" --sensors 3000 --avg-degree 7 --sigma 0.05 --anchors corners --side 1 --seed 5 -q 2> /dev/null
 ARGS=(--algorithm pipeline --max-iter 3000 --tol 0)
 mpi 2 "$SNL" solve "$T/net.h5" -o "$T/ref.h5" "${ARGS[@]}" -q
 export SNL_TEST_CHECKPOINT_DELAY=0.15

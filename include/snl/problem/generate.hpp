@@ -20,8 +20,8 @@ constexpr GlobalId kReferenceSensors = 1000;
 constexpr double kAutoDegree = -1.0;
 /// The default average degree: 16 in 2D, 24 in 3D, the smallest even degrees of
 /// docs/generator.md's measurements at which default networks of up to 20,000
-/// sensors are fully localizable within a few draws (and all but a few in 10^5
-/// sensors are localizable at any n).
+/// sensors are fully localizable within a few draws (and at most a few sensors
+/// in 10^4 are not localizable at any n).
 double default_avg_degree(int dim);
 /// num_random_anchors value for the default anchors: the 2^p corners plus
 /// floor(n / 100) uniform random anchors.
