@@ -331,6 +331,8 @@ std::string checkpoint_options(const SolverOptions& opt) {
   // Only when they matter, so that earlier checkpoints still match.
   if (opt.temporal_block != 1) os << "|temporal_block=" << opt.temporal_block;
   if (seed_drives_iterates(opt.algorithm)) os << "|seed=" << opt.seed;
+  if (opt.stop != "papers") os << "|stop=" << opt.stop;
+  if (opt.algorithm == "pipeline" && opt.refine != "mm") os << "|refine=" << opt.refine;
   return os.str();
 }
 

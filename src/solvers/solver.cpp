@@ -31,6 +31,8 @@ std::string SolverOptions::validate() const {
   if (history_every < 0) return "--history-every must be >= 0";
   if (bb_rounds < 1 || bb_rounds > 10000) return "--bb-rounds must be in [1, 10000]";
   if (temporal_block < 1 || temporal_block > 64) return "--temporal-block must be in [1, 64]";
+  if (stop != "papers" && stop != "gradient") return "unknown --stop '" + stop + "' (expected papers or gradient)";
+  if (refine != "mm" && refine != "mm-accel") return "unknown --refine '" + refine + "' (expected mm or mm-accel)";
   return unsupported_option();
 }
 
@@ -53,7 +55,19 @@ std::string SolverOptions::unsupported_option() const {
     if (c.set && !(a->*c.capability))
       return std::string(c.option) + " is not honoured by --algorithm " + algorithm + " (only by " +
              algorithms_with(c.capability) + "); leave it out or give its default " + c.default_value;
+  if (refine != defaults.refine && a->id != AlgorithmId::kPipeline)
+    return "--refine is not honoured by --algorithm " + algorithm + " (only by pipeline); leave it out or give its default " +
+           defaults.refine;
   return "";
+}
+
+std::vector<AlgorithmId> SolverOptions::phases() const {
+  const AlgorithmInfo* a = find_algorithm(algorithm);
+  if (!a) return {};
+  std::vector<AlgorithmId> out = a->phases;
+  const AlgorithmInfo* r = find_algorithm(refine);
+  if (a->id == AlgorithmId::kPipeline && r) out.back() = r->id;
+  return out;
 }
 
 std::string Summary::brief_report() const {
@@ -99,6 +113,7 @@ class Solver::Run {
     std::int64_t k = 0;         // iterations done in this phase
     std::int64_t every = 1;     // record interval
     std::int64_t block = 1;     // iterations per pass at most
+    std::int64_t stop_every = 1;  // --stop gradient: the test's interval (a multiple of every)
     double prev_obj = 0;        // for check_monotone
     double time = 0;            // in iterate()
     TerminationType term = TerminationType::kNoConvergence;
@@ -111,10 +126,12 @@ class Solver::Run {
     bool finite = true;
     bool signalled = false;  // a stop signal on some rank
     bool clock = false;      // rank 0's checkpoint clock ran out
+    double rel_grad = NAN;   // --stop gradient, where tested
   };
 
   void add_stop_terms(Phase& ph, bool with_grad, detail::ExactSum* sums);
   double grad_norm(Phase& ph);
+  double relative_gradient(Phase& ph);
   void start_phase(Phase& ph);
   void set_pass_sizes(Phase& ph) const;
   bool pass(Phase& ph);  // false: the phase ends
@@ -144,6 +161,9 @@ class Solver::Run {
   Summary sum_;
   std::vector<AlgorithmId> phases_;
   std::vector<double> xs_;  // scratch for metrics: a local array whose ghost rows they exchange
+  std::vector<double> gs_;  // scratch: owned rows of a gradient (--stop gradient)
+  std::int64_t xs_iteration_ = -1;  // >= 0: xs_ holds this total iteration's positions, ghosts exchanged
+  double xs_ml_ = NAN;              // and f there
   std::vector<double> x_;   // owned rows: the start of the next phase, the result at the end
   double messages_ = 0, reals_ = 0;
   std::int64_t total_it_ = 0;
@@ -177,8 +197,9 @@ Solver::Run::Run(const Solver& s, const std::vector<double>& x0)
   halo_.reset_counters();
   sum_.algorithm = opt_.algorithm;
   sum_.ranks = comm_size(comm_);
-  phases_ = find_algorithm(opt_.algorithm)->phases;  // known: the options were validated
+  phases_ = opt_.phases();  // known: the options were validated
   xs_.assign(std::size_t(prob_.num_local()) * p_, 0.0);
+  if (opt_.stop == "gradient") gs_.assign(std::size_t(prob_.num_owned()) * p_, 0.0);
   x_ = x0;
   x_.resize(std::size_t(prob_.num_owned()) * p_);
 }
@@ -230,6 +251,7 @@ void Solver::Run::start_phase(Phase& ph) {
     restart_file_.reset();
   }
   sum_.lipschitz = ph.alg->lipschitz();
+  xs_iteration_ = -1;
   set_pass_sizes(ph);
   ph.prev_obj = objective_of(*ph.alg);
   if (ph.k == 0) {
@@ -253,11 +275,16 @@ void Solver::Run::set_pass_sizes(Phase& ph) const {
   ph.block = std::max(1, std::min(opt_.temporal_block, ph.alg->max_levels()));
   if (opt_.history_every <= 0) every = (every + ph.block - 1) / ph.block * ph.block;
   ph.every = every;
+  // The gradient test costs about an iteration (an exchange, a pass over the
+  // edges): at most every 10 iterations, at records (which then reuse its f).
+  ph.stop_every = every * ((10 + every - 1) / every);
 }
 
 bool Solver::Run::pass(Phase& ph) {
   iterate(ph, pass_length(ph));
-  const PassResult r = reduce(ph);
+  PassResult r = reduce(ph);
+  if (opt_.stop == "gradient" && opt_.tol > 0 && r.finite && (ph.k % ph.stop_every == 0 || ph.k == opt_.max_iter))
+    r.rel_grad = relative_gradient(ph);
   if (!r.finite) return stop(ph, TerminationType::kFailure, "non-finite iterate");
   const bool converged = test_stop(ph, r);
   if (opt_.check_monotone && ph.info->monotone_surrogate) check_monotone(ph);
@@ -372,8 +399,42 @@ double Solver::Run::grad_norm(Phase& ph) {
   return std::sqrt(sums[2].value());
 }
 
+// Collective: ||grad c(x)|| / (2 sqrt f(x)) at the phase's positions, c the
+// cost the phase minimizes (f for the refinements, f_hat for the others);
+// both sums exact, so the test is the same for any partition. xs_ keeps the
+// exchanged positions and f for a record at the same iteration.
+double Solver::Run::relative_gradient(Phase& ph) {
+  const LocalId n = prob_.num_owned();
+  const auto& x = ph.alg->positions();
+  std::copy(x.begin(), x.begin() + std::size_t(n) * p_, xs_.begin());
+  const std::int64_t b0 = halo_.bytes_sent();
+  halo_.exchange(xs_.data(), p_);
+  instrumentation_bytes_ += halo_.bytes_sent() - b0;
+  xs_ml_ = evaluate_costs(prob_, xs_.data()).ml;
+  xs_iteration_ = total_it_;
+  const AlgorithmId id = ph.info->id;
+  if (id == AlgorithmId::kMM || id == AlgorithmId::kMMAccel || id == AlgorithmId::kBB)
+    ml_gradient(prob_, xs_.data(), gs_.data(), 0, n);
+  else
+    relaxed_gradient(prob_, xs_.data(), gs_.data(), 0, n);
+  detail::ExactSum g;
+  for (LocalId v = 0; v < n; ++v) {
+    double s = 0;
+    for (int c = 0; c < p_; ++c) s += gs_[std::size_t(v) * p_ + c] * gs_[std::size_t(v) * p_ + c];
+    g.add(s);
+  }
+  detail::allreduce_exact(&g, 1, comm_);
+  const double gn = std::sqrt(g.value());
+  return xs_ml_ > 0 ? gn / (2.0 * std::sqrt(xs_ml_)) : gn;
+}
+
 bool Solver::Run::test_stop(Phase& ph, const PassResult& r) const {
-  if (opt_.tol > 0 && r.rel <= opt_.tol) {
+  if (opt_.stop == "gradient") {
+    if (r.rel_grad <= opt_.tol) {  // NaN (not tested here) compares false
+      ph.msg = "relative gradient " + std::to_string(r.rel_grad) + " <= tol";
+      return true;
+    }
+  } else if (opt_.tol > 0 && r.rel <= opt_.tol) {
     ph.msg = "relative improvement " + std::to_string(r.rel) + " <= tol";
     return true;
   }
@@ -459,6 +520,7 @@ void Solver::Run::end_phase(Phase& ph) {
   const auto& xp = ph.alg->positions();
   std::copy(xp.begin(), xp.begin() + std::size_t(prob_.num_owned()) * p_, x_.begin());
   if (ph.info->gap_certificate) {
+    xs_iteration_ = -1;
     std::copy(x_.begin(), x_.end(), xs_.begin());
     const std::int64_t b1 = halo_.bytes_sent();
     halo_.exchange(xs_.data(), p_);
@@ -476,6 +538,7 @@ void Solver::Run::end_phase(Phase& ph) {
 // Final metrics at the solution, traffic and times over all ranks.
 Summary Solver::Run::finish(std::vector<double>* x_out) {
   sum_.iterations = total_it_;
+  xs_iteration_ = -1;
   std::copy(x_.begin(), x_.end(), xs_.begin());
   const std::int64_t b0 = halo_.bytes_sent();
   halo_.exchange(xs_.data(), p_);
@@ -501,9 +564,13 @@ Summary Solver::Run::finish(std::vector<double>* x_out) {
 
 void Solver::Run::metrics_at(const std::vector<double>& x, IterationSummary& it) {
   const std::int64_t b0 = halo_.bytes_sent();
-  std::copy(x.begin(), x.begin() + std::size_t(prob_.num_owned()) * p_, xs_.begin());
-  halo_.exchange(xs_.data(), p_);
-  it.ml_cost = evaluate_costs(prob_, xs_.data()).ml;
+  if (xs_iteration_ == total_it_) {  // the stopping test has just evaluated these positions
+    it.ml_cost = xs_ml_;
+  } else {
+    std::copy(x.begin(), x.begin() + std::size_t(prob_.num_owned()) * p_, xs_.begin());
+    halo_.exchange(xs_.data(), p_);
+    it.ml_cost = evaluate_costs(prob_, xs_.data()).ml;
+  }
   const ErrorMetrics em = evaluate_errors(prob_, xs_.data());
   it.rmse = em.rmse;
   it.mpe = em.mpe;

@@ -37,6 +37,17 @@ struct SolverOptions {
   /// Relative improvement ||x(k) - x(k-1)|| / ||x(k)|| at or below which a
   /// phase stops (003, Sec. V uses 1e-6). 0 disables it.
   double tol = 1e-6;
+  /// Stopping rule of each phase, with --tol as its tolerance:
+  ///   papers:   ||x(k) - x(k-1)|| / ||x(k)|| <= tol (003, Sec. V; it shrinks
+  ///             with the step 1/L and with n, not with the distance to the optimum);
+  ///   gradient: ||grad c(x)|| / (2 sqrt f(x)) <= tol, c the phase's cost (f for
+  ///             MM, mm-accel and BB, f_hat for the others): the gradient against
+  ///             the norm it would have if its edge terms did not cancel
+  ///             (docs/quality.md, "Stopping rule"), tested every
+  ///             stop_interval() iterations.
+  std::string stop = "papers";
+  /// The refinement the pipeline runs after the relaxation: mm | mm-accel.
+  std::string refine = "mm";
   /// Stop when the norm of the gradient the method computes falls to this
   /// (the relaxation's grad f_hat at the extrapolated point). 0 disables it.
   double grad_tol = 0.0;
@@ -61,6 +72,9 @@ struct SolverOptions {
   bool check_monotone = true;
 #endif
   std::uint64_t seed = 1;
+  /// The phases the Solver runs: the algorithm's (registry), the pipeline's
+  /// refinement replaced by `refine`.
+  std::vector<AlgorithmId> phases() const;
   /// "" if valid, else the message (unsupported_option() included).
   std::string validate() const;
   /// "" unless an option is set to a non-default value that the algorithm
