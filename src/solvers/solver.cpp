@@ -26,7 +26,7 @@ std::string SolverOptions::validate() const {
   if (!find_algorithm(algorithm))
     return "unknown --algorithm '" + algorithm + "' (expected " + algorithm_names(", ", " or ") + ")";
   if (max_iter < 0) return "--max-iter must be >= 0";
-  if (!(tol >= 0) || !std::isfinite(tol)) return "--tol must be a finite number >= 0";
+  if (!std::isnan(tol) && (!(tol >= 0) || !std::isfinite(tol))) return "--tol must be a finite number >= 0";
   if (!(grad_tol >= 0) || !std::isfinite(grad_tol)) return "--grad-tol must be a finite number >= 0";
   if (history_every < 0) return "--history-every must be >= 0";
   if (bb_rounds < 1 || bb_rounds > 10000) return "--bb-rounds must be in [1, 10000]";
@@ -283,7 +283,7 @@ void Solver::Run::set_pass_sizes(Phase& ph) const {
 bool Solver::Run::pass(Phase& ph) {
   iterate(ph, pass_length(ph));
   PassResult r = reduce(ph);
-  if (opt_.stop == "gradient" && opt_.tol > 0 && r.finite && (ph.k % ph.stop_every == 0 || ph.k == opt_.max_iter))
+  if (opt_.stop == "gradient" && opt_.stop_tol() > 0 && r.finite && (ph.k % ph.stop_every == 0 || ph.k == opt_.max_iter))
     r.rel_grad = relative_gradient(ph);
   if (!r.finite) return stop(ph, TerminationType::kFailure, "non-finite iterate");
   const bool converged = test_stop(ph, r);
@@ -430,11 +430,11 @@ double Solver::Run::relative_gradient(Phase& ph) {
 
 bool Solver::Run::test_stop(Phase& ph, const PassResult& r) const {
   if (opt_.stop == "gradient") {
-    if (r.rel_grad <= opt_.tol) {  // NaN (not tested here) compares false
+    if (r.rel_grad <= opt_.stop_tol()) {  // NaN (not tested here) compares false
       ph.msg = "relative gradient " + std::to_string(r.rel_grad) + " <= tol";
       return true;
     }
-  } else if (opt_.tol > 0 && r.rel <= opt_.tol) {
+  } else if (opt_.stop_tol() > 0 && r.rel <= opt_.stop_tol()) {
     ph.msg = "relative improvement " + std::to_string(r.rel) + " <= tol";
     return true;
   }

@@ -12,7 +12,7 @@ source "$(dirname "$0")/common.bash"
 # mm3: MM on a 3D network (3D SIMD kernels, 3D edge variables in the checkpoint).
 # pipeline4: four iterations per pass over memory (--temporal-block 4); its
 # signal checkpoints fall on pass ends, and its positions equal pipeline's.
-for case in async pipeline pipeline4 bb mm3 mm; do  # mm last: the refusals below use its checkpoint
+for case in async pipeline pipeline4 bb mm3 mm-accel mm; do  # mm last: the refusals below use its checkpoint
   alg=${case%[34]}
   ARGS=(--max-iter 4000 --tol 0 -q)
   NET="$T/net.h5"
