@@ -18,11 +18,14 @@ T=$(mktemp -d); trap 'rm -rf "$T"' EXIT
 for net in "$@"; do
   name=$(basename "$net" .h5)
   s() { local tag=$1; shift; mpirun -np "$NP" "$SNL" solve "$net" -o "$T/r.h5" -q --json "$OUT/$name.$tag.json" "$@"; }
-  s papers.mm --stop papers --refine mm
-  s papers.mm-accel --stop papers --refine mm-accel
-  s gradient.mm --stop gradient --refine mm
-  s gradient.mm-accel --stop gradient --refine mm-accel
-  s reference --stop gradient --refine mm-accel --tol 1e-9 --max-iter 20000
+  # SKIP: tags already in OUT (a long network's runs can be made one at a time).
+  for run in "gradient.mm-accel --stop gradient --refine mm-accel" \
+             "reference --stop gradient --refine mm-accel --tol 1e-9 --max-iter 20000" \
+             "papers.mm --stop papers --refine mm" "papers.mm-accel --stop papers --refine mm-accel" \
+             "gradient.mm --stop gradient --refine mm"; do
+    set -- $run; tag=$1; shift
+    [ -f "$OUT/$name.$tag.json" ] || s $tag "$@"
+  done
 done
 /usr/bin/python3 - "$OUT" > "$OUT/summary.md" <<'PY'
 import glob, json, os, sys
@@ -33,6 +36,8 @@ for ref in sorted(glob.glob(os.path.join(out, "*.reference.json"))):
     name = os.path.basename(ref)[: -len(".reference.json")]
     r = json.load(open(ref))
     for tag in ["papers.mm", "papers.mm-accel", "gradient.mm", "gradient.mm-accel", "reference"]:
+        if not os.path.exists(os.path.join(out, f"{name}.{tag}.json")):
+            continue
         j = json.load(open(os.path.join(out, f"{name}.{tag}.json")))
         rule, ref_alg = tag.split(".", 1) if tag != "reference" else ("gradient 1e-9", "mm-accel")
         print(f"| {name} | {rule} | {ref_alg} | {j['iterations']} | {j['termination']} | {j['ml_cost']:.8g} | "

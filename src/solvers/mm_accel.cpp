@@ -177,55 +177,59 @@ class MMAccel final : public Algorithm {
   }
 
   // Collective: F at (x_[b], y_[b], w_[b]) (000, eq. 2), after exchanging
-  // x_[b]'s ghost rows; the interior nodes' terms overlap the exchange.
+  // x_[b]'s ghost rows; the interior chunks' terms overlap the exchange.
   double surrogate(int b) {
     HaloPlan& halo = prob_.graph().halo();
-    const LocalId n_int = prob_.graph().num_interior(), n = prob_.num_owned();
     detail::ExactSum F;  // exact: the same F, and so the same decisions, for any partition
     halo.begin(x_[b].data(), prob_.dim());
-    add_surrogate_terms(b, 0, n_int, F);
+    add_surrogate_terms(b, 0, lanes_.split, F);
     halo.end(x_[b].data(), prob_.dim());
-    add_surrogate_terms(b, n_int, n, F);
+    add_surrogate_terms(b, lanes_.split, lanes_.size(), F);
     detail::allreduce_exact(&F, 1, prob_.comm());
     return F.value();
   }
-  void add_surrogate_terms(int b, LocalId v0, LocalId v1, detail::ExactSum& F) const {
+  void add_surrogate_terms(int b, std::int64_t c0, std::int64_t c1, detail::ExactSum& F) const {
     if (prob_.dim() == 2)
-      add_terms<2>(b, v0, v1, F);
+      add_terms<2>(b, c0, c1, F);
     else
-      add_terms<3>(b, v0, v1, F);
+      add_terms<3>(b, c0, c1, F);
   }
-  // Each sensor edge once (at its smaller-id end), then each anchor edge.
+  // Chunks [c0, c1) of the lane layout: each sensor edge at the slot oriented
+  // (owner, neighbour) in global-id order (so once over all ranks), then the
+  // chunk's anchor edges.
   template <int P>
-  void add_terms(int b, LocalId v0, LocalId v1, detail::ExactSum& F) const {
-    const auto& gr = prob_.graph();
-    const auto& off = gr.offsets();
-    const auto& adj = gr.adjacency();
+  void add_terms(int b, std::int64_t c0, std::int64_t c1, detail::ExactSum& F) const {
+    const int C = lanes_.lanes;
     const auto& aoff = prob_.anchor_offsets();
     const double* x = x_[b].data();
     const double* y = y_[b].data();
     const double* w = w_[b].data();
-    for (LocalId v = v0; v < v1; ++v) {
-      const GlobalId gv = gr.global_id(v);
-      for (auto e = off[v]; e < off[v + 1]; ++e) {
-        const LocalId u = adj[e];
-        if (gr.global_id(u) < gv) continue;
-        double s = 0;
-        for (int c = 0; c < P; ++c) {
-          const double r = x[std::size_t(v) * P + c] - x[std::size_t(u) * P + c] - y[y_index(v, e, c)];
-          s += r * r;
+    for (std::int64_t c = c0; c < c1; ++c) {
+      for (std::int64_t g = lanes_.group_off[c]; g < lanes_.group_off[c + 1]; ++g) {
+        const unsigned mask = lanes_.real[g] & lanes_.fwd[g];
+        for (int L = 0; L < C; ++L) {
+          if (!((mask >> L) & 1)) continue;
+          const int q = detail::NodeLanes::lane_node(L, C);
+          const double* xv = x + std::size_t(lanes_.first[c] + q) * P;
+          const double* xu = x + std::size_t(lanes_.adj[g * C + q]) * P;
+          double s = 0;
+          for (int k = 0; k < P; ++k) {
+            const double r = xv[k] - xu[k] - y[std::size_t(g * P + k) * C + L];
+            s += r * r;
+          }
+          F.add(0.5 * s);
         }
-        F.add(0.5 * s);
       }
-      for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
-        const double* a = &prob_.anchors()[std::size_t(prob_.anchor_ids()[e]) * P];
-        double s = 0;
-        for (int c = 0; c < P; ++c) {
-          const double r = x[std::size_t(v) * P + c] - a[c] - w[std::size_t(e) * P + c];
-          s += r * r;
+      for (LocalId v = lanes_.first[c]; v < lanes_.first[c] + lanes_.count[c]; ++v)
+        for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
+          const double* a = &prob_.anchors()[std::size_t(prob_.anchor_ids()[e]) * P];
+          double s = 0;
+          for (int k = 0; k < P; ++k) {
+            const double r = x[std::size_t(v) * P + k] - a[k] - w[std::size_t(e) * P + k];
+            s += r * r;
+          }
+          F.add(0.5 * s);
         }
-        F.add(0.5 * s);
-      }
     }
   }
 
