@@ -19,6 +19,7 @@ for case in async pipeline pipeline4 bb mm3 mm-accel mm; do  # mm last: the refu
   EVERY=100
   if [ $case = async ]; then ARGS=(--max-iter 300 --tol 0 -q); NET="$T/small.h5"; EVERY=10; fi
   if [ $case = mm3 ]; then NET="$T/net3.h5"; fi
+  if [ $case = mm-accel ]; then ARGS=(--max-iter 2000 --tol 0 -q); fi  # z(k), z(k-1) and t in the checkpoint
   if [ $case = pipeline4 ]; then ARGS+=(--temporal-block 4); EVERY=50; fi
   mpi 2 "$SNL" solve "$NET" -o "$T/ref.$case.h5" --algorithm $alg "${ARGS[@]}"
   # Stop a run with SIGUSR1 after it has written some checkpoints.
