@@ -91,6 +91,7 @@ void run_method(const ExperimentCommand& cmd, LocalizationProblem& prob, std::si
   const AlgorithmInfo& info = *find_algorithm(alg);
   SolverOptions o;
   o.algorithm = alg;
+  o.stop = "papers";  // the papers' experiments, with their rule
   o.tol = cmd.tol;
   o.seed = key;
   if (info.consensus_rounds) o.bb_rounds = cmd.bb_rounds;
@@ -122,6 +123,7 @@ void run_trial(const ExperimentCommand& cmd, LocalizationProblem& prob, std::siz
   const char* const relaxation = algorithm_info(AlgorithmId::kRelaxation).name;
   SolverOptions ro;
   ro.algorithm = relaxation;
+  ro.stop = "papers";
   ro.tol = cmd.relax_tol;
   ro.max_iter = cmd.relax_max_iter;
   ro.history_every = cmd.relax_max_iter + 1;

@@ -326,13 +326,15 @@ void write_checkpoint(const std::string& path, const LocalizationProblem& prob, 
 std::string checkpoint_options(const SolverOptions& opt) {
   std::ostringstream os;
   os.precision(17);
-  os << opt.algorithm << "|max_iter=" << opt.max_iter << "|tol=" << opt.tol << "|grad_tol=" << opt.grad_tol
+  os << opt.algorithm << "|max_iter=" << opt.max_iter << "|tol=" << opt.stop_tol() << "|grad_tol=" << opt.grad_tol
      << "|history_every=" << opt.history_every << "|bb_rounds=" << opt.bb_rounds;
   // Only when they matter, so that earlier checkpoints still match.
   if (opt.temporal_block != 1) os << "|temporal_block=" << opt.temporal_block;
   if (seed_drives_iterates(opt.algorithm)) os << "|seed=" << opt.seed;
   if (opt.weights != "auto") os << "|weights=" << opt.weights;
   if (opt.loss != "l2") os << "|loss=" << opt.loss;
+  if (opt.stop != "papers") os << "|stop=" << opt.stop;
+  if (opt.algorithm == "pipeline" && opt.refine != "mm") os << "|refine=" << opt.refine;
   return os.str();
 }
 

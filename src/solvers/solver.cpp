@@ -26,7 +26,7 @@ std::string SolverOptions::validate() const {
   if (!find_algorithm(algorithm))
     return "unknown --algorithm '" + algorithm + "' (expected " + algorithm_names(", ", " or ") + ")";
   if (max_iter < 0) return "--max-iter must be >= 0";
-  if (!(tol >= 0) || !std::isfinite(tol)) return "--tol must be a finite number >= 0";
+  if (!std::isnan(tol) && (!(tol >= 0) || !std::isfinite(tol))) return "--tol must be a finite number >= 0";
   if (!(grad_tol >= 0) || !std::isfinite(grad_tol)) return "--grad-tol must be a finite number >= 0";
   if (history_every < 0) return "--history-every must be >= 0";
   if (bb_rounds < 1 || bb_rounds > 10000) return "--bb-rounds must be in [1, 10000]";
@@ -37,17 +37,29 @@ std::string SolverOptions::validate() const {
   } catch (const Error& e) {
     return e.what();
   }
+  if (stop != "papers" && stop != "gradient") return "unknown --stop '" + stop + "' (expected papers or gradient)";
+  if (refine != "auto" && refine != "mm" && refine != "mm-accel")
+    return "unknown --refine '" + refine + "' (expected auto, mm or mm-accel)";
   return unsupported_option();
 }
 
 namespace {
 // A method honours --weights/--loss when it and every phase it runs do (a
 // pipeline whose refinement ignores the model must not claim it).
-bool honours_model(const AlgorithmInfo& a) {
+bool honours_model(const AlgorithmInfo& a, const SolverOptions& o) {
   if (!a.measurement_model) return false;
-  for (AlgorithmId id : a.phases)
+  for (AlgorithmId id : o.phases())
     if (!algorithm_info(id).measurement_model) return false;
   return true;
+}
+
+// Whether the options ask for a model other than plain l2 without weights;
+// weights auto counts only when the network has sigmas.
+bool model_in_effect(const SolverOptions& o, bool network_has_sigmas) {
+  const WeightsSpec ws = parse_weights_spec(o.weights);
+  const bool weighted = ws.kind == WeightsSpec::Kind::kFile || ws.kind == WeightsSpec::Kind::kMultiplicative ||
+                        (ws.kind == WeightsSpec::Kind::kAuto && network_has_sigmas);
+  return weighted || o.loss != SolverOptions().loss;
 }
 }  // namespace
 
@@ -69,10 +81,22 @@ std::string SolverOptions::unsupported_option() const {
       {loss != defaults.loss, "--loss", &AlgorithmInfo::measurement_model, "l2"},
   };
   for (const auto& c : checks)
-    if (c.set && !(c.capability == &AlgorithmInfo::measurement_model ? honours_model(*a) : a->*c.capability))
+    if (c.set && !(c.capability == &AlgorithmInfo::measurement_model ? honours_model(*a, *this) : a->*c.capability))
       return std::string(c.option) + " is not honoured by --algorithm " + algorithm + " (only by " +
              algorithms_with(c.capability) + "); leave it out or give its default " + c.default_value;
+  if (refine != defaults.refine && a->id != AlgorithmId::kPipeline)
+    return "--refine is not honoured by --algorithm " + algorithm + " (only by pipeline); leave it out or give its default " +
+           defaults.refine;
   return "";
+}
+
+std::vector<AlgorithmId> SolverOptions::phases() const {
+  const AlgorithmInfo* a = find_algorithm(algorithm);
+  if (!a) return {};
+  std::vector<AlgorithmId> out = a->phases;
+  const AlgorithmInfo* r = find_algorithm(resolved_refine(model_in_effect(*this, false)));
+  if (a->id == AlgorithmId::kPipeline && r) out.back() = r->id;
+  return out;
 }
 
 std::string Summary::brief_report() const {
@@ -95,8 +119,11 @@ Solver::Solver(LocalizationProblem& prob, SolverOptions opt) : prob_(prob), opt_
   if (!err.empty()) throw Error(err);
   // The measurement model every phase and cost uses; --weights auto means
   // none for a method that cannot honour weights (explicit values are refused).
+  const bool sigmas = prob_.has_sensor_sigmas() || prob_.has_anchor_sigmas();
+  if (find_algorithm(opt_.algorithm)->id == AlgorithmId::kPipeline)
+    opt_.refine = opt_.resolved_refine(model_in_effect(opt_, sigmas));
   WeightsSpec ws = parse_weights_spec(opt_.weights);
-  if (!honours_model(*find_algorithm(opt_.algorithm))) ws.kind = WeightsSpec::Kind::kNone;
+  if (!honours_model(*find_algorithm(opt_.algorithm), opt_)) ws.kind = WeightsSpec::Kind::kNone;
   prob_.set_measurement_model(ws, parse_loss_spec(opt_.loss));
 }
 
@@ -123,6 +150,7 @@ class Solver::Run {
     std::int64_t k = 0;         // iterations done in this phase
     std::int64_t every = 1;     // record interval
     std::int64_t block = 1;     // iterations per pass at most
+    std::int64_t stop_every = 1;  // --stop gradient: the test's interval (a multiple of every)
     double prev_obj = 0;        // for check_monotone
     double time = 0;            // in iterate()
     TerminationType term = TerminationType::kNoConvergence;
@@ -135,10 +163,12 @@ class Solver::Run {
     bool finite = true;
     bool signalled = false;  // a stop signal on some rank
     bool clock = false;      // rank 0's checkpoint clock ran out
+    double rel_grad = NAN;   // --stop gradient, where tested
   };
 
   void add_stop_terms(Phase& ph, bool with_grad, detail::ExactSum* sums);
   double grad_norm(Phase& ph);
+  double relative_gradient(Phase& ph);
   void start_phase(Phase& ph);
   void set_pass_sizes(Phase& ph) const;
   bool pass(Phase& ph);  // false: the phase ends
@@ -168,6 +198,9 @@ class Solver::Run {
   Summary sum_;
   std::vector<AlgorithmId> phases_;
   std::vector<double> xs_;  // scratch for metrics: a local array whose ghost rows they exchange
+  std::vector<double> gs_;  // scratch: owned rows of a gradient (--stop gradient)
+  std::int64_t xs_iteration_ = -1;  // >= 0: xs_ holds this total iteration's positions, ghosts exchanged
+  double xs_ml_ = NAN;              // and f there
   std::vector<double> x_;   // owned rows: the start of the next phase, the result at the end
   double messages_ = 0, reals_ = 0;
   std::int64_t total_it_ = 0;
@@ -201,8 +234,9 @@ Solver::Run::Run(const Solver& s, const std::vector<double>& x0)
   halo_.reset_counters();
   sum_.algorithm = opt_.algorithm;
   sum_.ranks = comm_size(comm_);
-  phases_ = find_algorithm(opt_.algorithm)->phases;  // known: the options were validated
+  phases_ = opt_.phases();  // known: the options were validated
   xs_.assign(std::size_t(prob_.num_local()) * p_, 0.0);
+  if (opt_.stop == "gradient") gs_.assign(std::size_t(prob_.num_owned()) * p_, 0.0);
   x_ = x0;
   x_.resize(std::size_t(prob_.num_owned()) * p_);
 }
@@ -254,6 +288,7 @@ void Solver::Run::start_phase(Phase& ph) {
     restart_file_.reset();
   }
   sum_.lipschitz = ph.alg->lipschitz();
+  xs_iteration_ = -1;
   set_pass_sizes(ph);
   ph.prev_obj = objective_of(*ph.alg);
   if (ph.k == 0) {
@@ -277,11 +312,16 @@ void Solver::Run::set_pass_sizes(Phase& ph) const {
   ph.block = std::max(1, std::min(opt_.temporal_block, ph.alg->max_levels()));
   if (opt_.history_every <= 0) every = (every + ph.block - 1) / ph.block * ph.block;
   ph.every = every;
+  // The gradient test costs about an iteration (an exchange, a pass over the
+  // edges): at most every 10 iterations, at records (which then reuse its f).
+  ph.stop_every = every * ((10 + every - 1) / every);
 }
 
 bool Solver::Run::pass(Phase& ph) {
   iterate(ph, pass_length(ph));
-  const PassResult r = reduce(ph);
+  PassResult r = reduce(ph);
+  if (opt_.stop == "gradient" && opt_.stop_tol() > 0 && r.finite && (ph.k % ph.stop_every == 0 || ph.k == opt_.max_iter))
+    r.rel_grad = relative_gradient(ph);
   if (!r.finite) return stop(ph, TerminationType::kFailure, "non-finite iterate");
   const bool converged = test_stop(ph, r);
   if (opt_.check_monotone && ph.info->monotone_surrogate) check_monotone(ph);
@@ -396,8 +436,42 @@ double Solver::Run::grad_norm(Phase& ph) {
   return std::sqrt(sums[2].value());
 }
 
+// Collective: ||grad c(x)|| / (2 sqrt f(x)) at the phase's positions, c the
+// cost the phase minimizes (f for the refinements, f_hat for the others);
+// both sums exact, so the test is the same for any partition. xs_ keeps the
+// exchanged positions and f for a record at the same iteration.
+double Solver::Run::relative_gradient(Phase& ph) {
+  const LocalId n = prob_.num_owned();
+  const auto& x = ph.alg->positions();
+  std::copy(x.begin(), x.begin() + std::size_t(n) * p_, xs_.begin());
+  const std::int64_t b0 = halo_.bytes_sent();
+  halo_.exchange(xs_.data(), p_);
+  instrumentation_bytes_ += halo_.bytes_sent() - b0;
+  xs_ml_ = evaluate_costs(prob_, xs_.data()).ml;
+  xs_iteration_ = total_it_;
+  const AlgorithmId id = ph.info->id;
+  if (id == AlgorithmId::kMM || id == AlgorithmId::kMMAccel || id == AlgorithmId::kBB)
+    ml_gradient(prob_, xs_.data(), gs_.data(), 0, n);
+  else
+    relaxed_gradient(prob_, xs_.data(), gs_.data(), 0, n);
+  detail::ExactSum g;
+  for (LocalId v = 0; v < n; ++v) {
+    double s = 0;
+    for (int c = 0; c < p_; ++c) s += gs_[std::size_t(v) * p_ + c] * gs_[std::size_t(v) * p_ + c];
+    g.add(s);
+  }
+  detail::allreduce_exact(&g, 1, comm_);
+  const double gn = std::sqrt(g.value());
+  return xs_ml_ > 0 ? gn / (2.0 * std::sqrt(xs_ml_)) : gn;
+}
+
 bool Solver::Run::test_stop(Phase& ph, const PassResult& r) const {
-  if (opt_.tol > 0 && r.rel <= opt_.tol) {
+  if (opt_.stop == "gradient") {
+    if (r.rel_grad <= opt_.stop_tol()) {  // NaN (not tested here) compares false
+      ph.msg = "relative gradient " + std::to_string(r.rel_grad) + " <= tol";
+      return true;
+    }
+  } else if (opt_.stop_tol() > 0 && r.rel <= opt_.stop_tol()) {
     ph.msg = "relative improvement " + std::to_string(r.rel) + " <= tol";
     return true;
   }
@@ -483,6 +557,7 @@ void Solver::Run::end_phase(Phase& ph) {
   const auto& xp = ph.alg->positions();
   std::copy(xp.begin(), xp.begin() + std::size_t(prob_.num_owned()) * p_, x_.begin());
   if (ph.info->gap_certificate) {
+    xs_iteration_ = -1;
     std::copy(x_.begin(), x_.end(), xs_.begin());
     const std::int64_t b1 = halo_.bytes_sent();
     halo_.exchange(xs_.data(), p_);
@@ -500,6 +575,7 @@ void Solver::Run::end_phase(Phase& ph) {
 // Final metrics at the solution, traffic and times over all ranks.
 Summary Solver::Run::finish(std::vector<double>* x_out) {
   sum_.iterations = total_it_;
+  xs_iteration_ = -1;
   std::copy(x_.begin(), x_.end(), xs_.begin());
   const std::int64_t b0 = halo_.bytes_sent();
   halo_.exchange(xs_.data(), p_);
@@ -525,9 +601,13 @@ Summary Solver::Run::finish(std::vector<double>* x_out) {
 
 void Solver::Run::metrics_at(const std::vector<double>& x, IterationSummary& it) {
   const std::int64_t b0 = halo_.bytes_sent();
-  std::copy(x.begin(), x.begin() + std::size_t(prob_.num_owned()) * p_, xs_.begin());
-  halo_.exchange(xs_.data(), p_);
-  it.ml_cost = evaluate_costs(prob_, xs_.data()).ml;
+  if (xs_iteration_ == total_it_) {  // the stopping test has just evaluated these positions
+    it.ml_cost = xs_ml_;
+  } else {
+    std::copy(x.begin(), x.begin() + std::size_t(prob_.num_owned()) * p_, xs_.begin());
+    halo_.exchange(xs_.data(), p_);
+    it.ml_cost = evaluate_costs(prob_, xs_.data()).ml;
+  }
   const ErrorMetrics em = evaluate_errors(prob_, xs_.data());
   it.rmse = em.rmse;
   it.mpe = em.mpe;

@@ -12,13 +12,14 @@ source "$(dirname "$0")/common.bash"
 # mm3: MM on a 3D network (3D SIMD kernels, 3D edge variables in the checkpoint).
 # pipeline4: four iterations per pass over memory (--temporal-block 4); its
 # signal checkpoints fall on pass ends, and its positions equal pipeline's.
-for case in async pipeline pipeline4 bb mm3 mm; do  # mm last: the refusals below use its checkpoint
+for case in async pipeline pipeline4 bb mm3 mm-accel mm; do  # mm last: the refusals below use its checkpoint
   alg=${case%[34]}
   ARGS=(--max-iter 2000 --tol 0 -q)
   NET="$T/net.h5"
   EVERY=50
   if [ $case = async ]; then ARGS=(--max-iter 300 --tol 0 -q); NET="$T/small.h5"; EVERY=10; fi
   if [ $case = mm3 ]; then NET="$T/net3.h5"; fi
+  if [ $case = mm-accel ]; then ARGS=(--max-iter 2000 --tol 0 -q); fi  # z(k), z(k-1) and t in the checkpoint
   if [ $case = pipeline4 ]; then ARGS+=(--temporal-block 4); EVERY=40; fi
   mpi 2 "$SNL" solve "$NET" -o "$T/ref.$case.h5" --algorithm $alg "${ARGS[@]}"
   # Stop a run with SIGUSR1 after it has written some checkpoints.

@@ -14,7 +14,7 @@ source "$(dirname "$0")/common.bash"
 "$SNL" solve "$T/net.h5" -o "$T/keep.h5" --max-iter 5 --tol 0 -q
 sum0=$(md5sum < "$T/keep.h5")
 
-ALGS="relaxation mm pipeline bb pm async async-exact"
+ALGS="relaxation mm mm-accel pipeline bb pm async async-exact"
 declare -A HONOURED=(
   [grad-tol]="relaxation pipeline bb"
   [temporal-block]="relaxation mm pipeline"

@@ -56,6 +56,7 @@ TEST(Relaxation, NoiselessFullAnchorNetworkIsRecoveredExactly) {
   SolverOptions opt;
   opt.algorithm = "relaxation";
   opt.max_iter = 20000;
+  opt.stop = "papers";
   opt.tol = 1e-13;
   Solver solver(prob, opt);
   const Summary s = solver.solve(random_initial_positions(prob, 1), nullptr);

@@ -68,6 +68,8 @@ struct SolverOptions;
 ///   --history-every    which iterations are recorded; with --temporal-block, the pass boundaries
 ///   --bb-rounds        BB's iterates
 ///   --temporal-block   where tolerances are tested (pass ends); only when not 1
+///   --stop             where a phase stops; only when not papers
+///   --refine           the pipeline's second phase; only when not mm
 ///   --seed             async and async-exact only: their activation sequence is a
 ///                      function of (seed, activation count)
 /// Need not match: --partition and the number of ranks (results are

@@ -13,7 +13,7 @@ class Algorithm;
 class LocalizationProblem;
 struct SolverOptions;
 
-enum class AlgorithmId { kRelaxation, kMM, kPipeline, kBB, kPM, kAsync, kAsyncExact };
+enum class AlgorithmId { kRelaxation, kMM, kPipeline, kBB, kPM, kAsync, kAsyncExact, kMMAccel };
 
 struct AlgorithmInfo {
   AlgorithmId id;
@@ -50,7 +50,7 @@ std::string algorithm_names(const std::string& sep, const std::string& last_sep 
 std::string algorithms_with(bool AlgorithmInfo::*capability);
 
 /// Numeric codes of the algorithms in history/checkpoint/experiment files:
-/// 0=relaxation 1=mm 2=bb 3=pm 4=async 5=async-exact (9 for anything else).
+/// 0=relaxation 1=mm 2=bb 3=pm 4=async 5=async-exact 6=mm-accel (9 for anything else).
 int algorithm_code(const std::string& name);
 const char* algorithm_name(int code);  ///< inverse of algorithm_code ("?" if unknown)
 /// "0=relaxation 1=mm ...": the legend written next to the codes in files.

@@ -34,9 +34,31 @@ struct SolverOptions {
   std::string algorithm = "pipeline";
   /// Iterations per phase (the pipeline has two phases).
   std::int64_t max_iter = 10000;
-  /// Relative improvement ||x(k) - x(k-1)|| / ||x(k)|| at or below which a
-  /// phase stops (003, Sec. V uses 1e-6). 0 disables it.
-  double tol = 1e-6;
+  /// Tolerance of the stopping rule `stop` (0 disables it; NaN: the rule's
+  /// default, stop_tol()): with papers, the relative improvement
+  /// ||x(k) - x(k-1)|| / ||x(k)|| at or below which a phase stops (003,
+  /// Sec. V uses 1e-6); with gradient, the relative gradient.
+  double tol = std::numeric_limits<double>::quiet_NaN();
+  /// Stopping rule of each phase, with --tol as its tolerance:
+  ///   papers:   ||x(k) - x(k-1)|| / ||x(k)|| <= tol (003, Sec. V; it shrinks
+  ///             with the step 1/L and with n, not with the distance to the optimum);
+  ///   gradient: ||grad c(x)|| / (2 sqrt f(x)) <= tol, c the phase's cost (f for
+  ///             MM, mm-accel and BB, f_hat for the others): the gradient against
+  ///             the norm it would have if its edge terms did not cancel
+  ///             (docs/quality.md, "Stopping rule"), tested every
+  ///             stop_interval() iterations.
+  std::string stop = "gradient";
+  /// The refinement the pipeline runs after the relaxation: mm | mm-accel, or
+  /// auto: mm-accel under the plain l2 unweighted model, mm when weights or a
+  /// robust loss are in effect (mm-accel does not honour them). The Solver
+  /// resolves auto once it knows whether the network has sigmas.
+  std::string refine = "auto";
+  /// `refine` with auto resolved for a model that is (or is not) weighted/robust.
+  std::string resolved_refine(bool model_in_effect) const {
+    return refine != "auto" ? refine : (model_in_effect ? "mm" : "mm-accel");
+  }
+  /// tol, or where it is NaN the rule's default: 1e-6 (papers), 1e-5 (gradient).
+  double stop_tol() const { return std::isnan(tol) ? (stop == "papers" ? 1e-6 : 1e-5) : tol; }
   /// Stop when the norm of the gradient the method computes falls to this
   /// (the relaxation's grad f_hat at the extrapolated point). 0 disables it.
   double grad_tol = 0.0;
@@ -66,6 +88,9 @@ struct SolverOptions {
   std::string weights = "auto";
   /// Loss on the range residuals: l2 | huber:DELTA.
   std::string loss = "l2";
+  /// The phases the Solver runs: the algorithm's (registry), the pipeline's
+  /// refinement replaced by `refine`.
+  std::vector<AlgorithmId> phases() const;
   /// "" if valid, else the message (unsupported_option() included).
   std::string validate() const;
   /// "" unless an option is set to a non-default value that the algorithm

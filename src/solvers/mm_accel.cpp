@@ -1,0 +1,257 @@
+// Accelerated MM (mm-accel): 000's MM step (Algorithm 1, eqs. 11-13) taken
+// from a Nesterov-extrapolated point, kept monotone in the MM surrogate F by
+// rejecting any step that would raise F and restarting the momentum there.
+//
+// MM is projected gradient on z = (x, y, w) with step 1/L over the product of
+// R^{np} and the range spheres. Its accelerated form extrapolates z:
+//   v = z(k) + beta_t (z(k) - z(k-1)),  z+ = P_C(v - grad F(v) / L),
+// beta_t = t / (t + 3), t the steps accepted since the last restart (the
+// (k-1)/(k+2) sequence of Nesterov's method). z+ is accepted when F(z+) <=
+// F(z(k)); otherwise it is discarded, t = 0, and the next iteration is a plain
+// MM step from z(k), which 000's majorization argument makes monotone (a
+// projected gradient step with step 1/L, L >= the Lipschitz constant of grad F,
+// from a feasible point never raises F). This is the function-value restart of
+// O'Donoghue & Candes (Found. Comput. Math. 2015) made monotone as in Beck &
+// Teboulle's MFISTA (IEEE TIP 2009) and Li & Lin's monotone APG for nonconvex
+// problems (NeurIPS 2015): F never increases, and f(x) <= F(z) throughout.
+//
+// One iteration is one kernel pass and one halo exchange (the new x rows),
+// so one message per sensor as for MM; a rejected iteration counts as one.
+// F is summed exactly (detail::ExactSum) and the extrapolation is the same
+// arithmetic on every copy of a row or edge variable, so the iterates are
+// bit-identical for any number of ranks. Parameter-free: L is MM's (eq. 9).
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "core/exact_sum.hpp"
+#include "kernels/kernels.hpp"
+#include "solvers/algorithm_util.hpp"
+#include "solvers/methods.hpp"
+
+namespace snl {
+
+namespace {
+
+using detail::project_sphere;
+
+class MMAccel final : public Algorithm {
+ public:
+  explicit MMAccel(LocalizationProblem& prob)
+      : prob_(prob), L_(2.0 * prob.max_degree() + prob.max_anchor_degree() + 2.0) {}
+  std::string name() const override { return algorithm_info(AlgorithmId::kMMAccel).name; }
+  double lipschitz() const override { return L_; }
+  double reals_per_iteration() const override { return prob_.dim(); }
+
+  void start(const std::vector<double>& x0) override {
+    for (auto& b : x_) b.assign(std::size_t(prob_.num_local()) * prob_.dim(), 0.0);
+    std::copy(x0.begin(), x0.begin() + std::size_t(prob_.num_owned()) * prob_.dim(), x_[kCur].begin());
+    prob_.graph().halo().exchange(x_[kCur].data(), prob_.dim());
+    x_[kPrev] = x_[kCur];
+    lanes_.build(prob_);
+    norms_.assign(2 * detail::kMaxLanes, 0.0);
+    if (prob_.dim() == 2)
+      init<2>();
+    else
+      init<3>();
+    y_[kPrev] = y_[kCur];
+    w_[kPrev] = w_[kCur];
+    t_ = 0;
+    F_ = surrogate(kCur);
+  }
+
+  // Extrapolate, one MM step from there, exchange the new rows, accept or reject.
+  void iterate() override {
+    const double beta = t_ == 0 ? 0.0 : double(t_) / double(t_ + 3);
+    const double* v = extrapolate(beta);
+    const detail::MMStep st{v, x_[kOut].data(), y_[kWork].data(), w_[kWork].data(), (L_ - 1.0) / L_, 1.0 / L_,
+                            norms_.data(), false};
+    std::fill(norms_.begin(), norms_.end(), 0.0);
+    detail::mm_chunks(prob_, lanes_, 0, lanes_.size(), st);
+    const double F = surrogate(kOut);  // exchanges the new rows (the iteration's message)
+    if (beta > 0 && !(F <= F_)) {      // F would rise: keep z(k), restart the momentum
+      t_ = 0;
+      ++restarts_;
+      return;
+    }
+    std::swap(x_[kPrev], x_[kCur]);
+    std::swap(x_[kCur], x_[kOut]);
+    std::swap(y_[kPrev], y_[kCur]);
+    std::swap(y_[kCur], y_[kWork]);
+    std::swap(w_[kPrev], w_[kCur]);
+    std::swap(w_[kCur], w_[kWork]);
+    F_ = F;
+    ++t_;
+  }
+
+  const std::vector<double>& positions() const override { return x_[kCur]; }
+  // The last accepted step's change (an iteration that rejected its step leaves it as it was).
+  const double* previous_positions() const override { return x_[kPrev].data(); }
+  void change_norms(double* d, double* s) const override {
+    detail::diff_norms(prob_, x_[kCur].data(), x_[kPrev].data(), d, s);
+  }
+  double objective() override { return F_; }
+  std::int64_t memory_bytes() const override {
+    std::size_t n = norms_.capacity();
+    for (const auto& b : x_) n += b.capacity();
+    for (const auto& b : y_) n += b.capacity();
+    for (const auto& b : w_) n += b.capacity();
+    return static_cast<std::int64_t>(sizeof(double) * n) + lanes_.bytes();
+  }
+  // z(k), z(k-1) and the steps since the restart: the next iterate follows from them.
+  void save(StateWriter& w) const override {
+    const int p = prob_.dim();
+    w.scalar("t", double(t_));
+    w.node_rows("x", x_[kCur].data(), p);
+    w.node_rows("x_prev", x_[kPrev].data(), p);
+    w.edge_rows("y", p, [&](LocalId v, std::int64_t e, int c) { return y_[kCur][y_index(v, e, c)]; });
+    w.edge_rows("y_prev", p, [&](LocalId v, std::int64_t e, int c) { return y_[kPrev][y_index(v, e, c)]; });
+    w.anchor_rows("w", w_[kCur].data(), p);
+    w.anchor_rows("w_prev", w_[kPrev].data(), p);
+  }
+  void load(const StateReader& r) override {
+    const int p = prob_.dim();
+    t_ = static_cast<std::int64_t>(r.scalar("t"));
+    r.node_rows("x", x_[kCur].data(), p);
+    r.node_rows("x_prev", x_[kPrev].data(), p);
+    r.edge_rows("y", p, [&](LocalId v, std::int64_t e, int c, double y) { y_[kCur][y_index(v, e, c)] = y; });
+    r.edge_rows("y_prev", p, [&](LocalId v, std::int64_t e, int c, double y) { y_[kPrev][y_index(v, e, c)] = y; });
+    r.anchor_rows("w", w_[kCur].data(), p);
+    r.anchor_rows("w_prev", w_[kPrev].data(), p);
+    prob_.graph().halo().exchange(x_[kPrev].data(), p);
+    F_ = surrogate(kCur);  // exchanges x's ghost rows; F is a function of z(k)
+  }
+
+ private:
+  enum { kCur = 0, kPrev = 1, kOut = 2, kWork = 2, kV = 3 };  // x_: 4 buffers; y_, w_: 3
+
+  // The extrapolated point into the work buffers: y and w always (the kernel
+  // updates them in place), x (ghost rows too, from the exchanged rows of z(k)
+  // and z(k-1): no extra message) only when beta > 0.
+  const double* extrapolate(double beta) {
+    auto blend = [beta](const std::vector<double>& a, const std::vector<double>& b, std::vector<double>& out) {
+      for (std::size_t i = 0; i < a.size(); ++i) out[i] = a[i] + beta * (a[i] - b[i]);
+    };
+    if (beta == 0) {
+      y_[kWork] = y_[kCur];
+      w_[kWork] = w_[kCur];
+      return x_[kCur].data();
+    }
+    blend(y_[kCur], y_[kPrev], y_[kWork]);
+    blend(w_[kCur], w_[kPrev], w_[kWork]);
+    blend(x_[kCur], x_[kPrev], x_[kV]);
+    return x_[kV].data();
+  }
+
+  // Index in the y buffers (lane layout) of coordinate c of CSR slot e of owned node v.
+  std::size_t y_index(LocalId v, std::int64_t e, int c) const {
+    return lanes_.at(v, e - prob_.graph().offsets()[v], prob_.dim(), c);
+  }
+
+  // y_e = P_sphere(d_e)(x_i - x_j), w_ik = P_sphere(r_ik)(x_i - a_k) (as MM).
+  template <int P>
+  void init() {
+    const auto& gr = prob_.graph();
+    const auto& off = gr.offsets();
+    const auto& adj = gr.adjacency();
+    const auto& x = x_[kCur];
+    for (auto& b : y_) b.assign(std::size_t(lanes_.groups()) * lanes_.lanes * P, 0.0);
+    for (auto& b : w_) b.assign(prob_.anchor_ranges().size() * P, 0.0);
+    for (LocalId v = 0; v < gr.num_owned(); ++v) {
+      for (auto e = off[v]; e < off[v + 1]; ++e) {
+        const bool fwd = gr.global_id(v) < gr.global_id(adj[e]);
+        const LocalId i = fwd ? v : adj[e], j = fwd ? adj[e] : v;
+        double y[P];
+        for (int c = 0; c < P; ++c) y[c] = x[std::size_t(i) * P + c] - x[std::size_t(j) * P + c];
+        project_sphere<P>(gr.edge_value(e), y);
+        for (int c = 0; c < P; ++c) y_[kCur][y_index(v, e, c)] = y[c];
+      }
+      const auto& aoff = prob_.anchor_offsets();
+      for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
+        const double* a = &prob_.anchors()[std::size_t(prob_.anchor_ids()[e]) * P];
+        double* w = &w_[kCur][std::size_t(e) * P];
+        for (int c = 0; c < P; ++c) w[c] = x[std::size_t(v) * P + c] - a[c];
+        project_sphere<P>(prob_.anchor_ranges()[e], w);
+      }
+    }
+  }
+
+  // Collective: F at (x_[b], y_[b], w_[b]) (000, eq. 2), after exchanging
+  // x_[b]'s ghost rows; the interior chunks' terms overlap the exchange.
+  double surrogate(int b) {
+    HaloPlan& halo = prob_.graph().halo();
+    detail::ExactSum F;  // exact: the same F, and so the same decisions, for any partition
+    halo.begin(x_[b].data(), prob_.dim());
+    add_surrogate_terms(b, 0, lanes_.split, F);
+    halo.end(x_[b].data(), prob_.dim());
+    add_surrogate_terms(b, lanes_.split, lanes_.size(), F);
+    detail::allreduce_exact(&F, 1, prob_.comm());
+    return F.value();
+  }
+  void add_surrogate_terms(int b, std::int64_t c0, std::int64_t c1, detail::ExactSum& F) const {
+    if (prob_.dim() == 2)
+      add_terms<2>(b, c0, c1, F);
+    else
+      add_terms<3>(b, c0, c1, F);
+  }
+  // Chunks [c0, c1) of the lane layout: each sensor edge at the slot oriented
+  // (owner, neighbour) in global-id order (so once over all ranks), then the
+  // chunk's anchor edges.
+  template <int P>
+  void add_terms(int b, std::int64_t c0, std::int64_t c1, detail::ExactSum& F) const {
+    const int C = lanes_.lanes;
+    const auto& aoff = prob_.anchor_offsets();
+    const double* x = x_[b].data();
+    const double* y = y_[b].data();
+    const double* w = w_[b].data();
+    for (std::int64_t c = c0; c < c1; ++c) {
+      for (std::int64_t g = lanes_.group_off[c]; g < lanes_.group_off[c + 1]; ++g) {
+        const unsigned mask = lanes_.real[g] & lanes_.fwd[g];
+        for (int L = 0; L < C; ++L) {
+          if (!((mask >> L) & 1)) continue;
+          const int q = detail::NodeLanes::lane_node(L, C);
+          const double* xv = x + std::size_t(lanes_.first[c] + q) * P;
+          const double* xu = x + std::size_t(lanes_.adj[g * C + q]) * P;
+          double s = 0;
+          for (int k = 0; k < P; ++k) {
+            const double r = xv[k] - xu[k] - y[std::size_t(g * P + k) * C + L];
+            s += r * r;
+          }
+          F.add(0.5 * s);
+        }
+      }
+      for (LocalId v = lanes_.first[c]; v < lanes_.first[c] + lanes_.count[c]; ++v)
+        for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
+          const double* a = &prob_.anchors()[std::size_t(prob_.anchor_ids()[e]) * P];
+          double s = 0;
+          for (int k = 0; k < P; ++k) {
+            const double r = x[std::size_t(v) * P + k] - a[k] - w[std::size_t(e) * P + k];
+            s += r * r;
+          }
+          F.add(0.5 * s);
+        }
+    }
+  }
+
+  LocalizationProblem& prob_;
+  double L_;
+  std::array<std::vector<double>, 4> x_;  // z(k), z(k-1), the step's output, the extrapolated rows
+  std::array<std::vector<double>, 3> y_, w_;  // z(k), z(k-1), the step's (in place); y_ in lane layout
+  detail::NodeLanes lanes_;
+  std::vector<double> norms_;  // the kernel's per-lane norms (unused: the solver sums the change itself)
+  std::int64_t t_ = 0;         // steps accepted since the last restart
+  std::int64_t restarts_ = 0;
+  double F_ = 0;               // F(z(k))
+};
+
+}  // namespace
+
+namespace detail {
+
+std::unique_ptr<Algorithm> make_mm_accel(LocalizationProblem& prob, const SolverOptions&) {
+  return std::make_unique<MMAccel>(prob);
+}
+
+}  // namespace detail
+
+}  // namespace snl
