@@ -13,5 +13,9 @@ std::unique_ptr<Algorithm> make_bb(LocalizationProblem& prob, const SolverOption
 std::unique_ptr<Algorithm> make_pm(LocalizationProblem& prob, const SolverOptions& opt);          // pm.cpp
 std::unique_ptr<Algorithm> make_async(LocalizationProblem& prob, const SolverOptions& opt);       // async.cpp
 std::unique_ptr<Algorithm> make_async_exact(LocalizationProblem& prob, const SolverOptions& opt); // async.cpp
+std::unique_ptr<Algorithm> make_bb_calafiore(LocalizationProblem& prob, const SolverOptions& opt);  // bb_calafiore.cpp
+std::unique_ptr<Algorithm> make_sdp(LocalizationProblem& prob, const SolverOptions& opt);   // centralized/centralized.cpp
+std::unique_ptr<Algorithm> make_esdp(LocalizationProblem& prob, const SolverOptions& opt);  // centralized/centralized.cpp
+std::unique_ptr<Algorithm> make_edm(LocalizationProblem& prob, const SolverOptions& opt);   // centralized/centralized.cpp
 
 }  // namespace snl::detail

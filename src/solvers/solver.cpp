@@ -49,6 +49,9 @@ std::string SolverOptions::unsupported_option() const {
       {temporal_block != defaults.temporal_block, "--temporal-block", &AlgorithmInfo::temporal_blocking, "1"},
       {bb_rounds != defaults.bb_rounds, "--bb-rounds", &AlgorithmInfo::consensus_rounds, "20"},
   };
+  if (a->one_shot && (tol != defaults.tol || max_iter != defaults.max_iter))
+    return std::string(tol != defaults.tol ? "--tol" : "--max-iter") + " is not honoured by --algorithm " +
+           algorithm + " (a convex relaxation solved once by an SDP solver, to its own tolerance); leave it out";
   for (const auto& c : checks)
     if (c.set && !(a->*c.capability))
       return std::string(c.option) + " is not honoured by --algorithm " + algorithm + " (only by " +
@@ -373,6 +376,10 @@ double Solver::Run::grad_norm(Phase& ph) {
 }
 
 bool Solver::Run::test_stop(Phase& ph, const PassResult& r) const {
+  if (ph.info->one_shot) {
+    ph.msg = "solved";
+    return true;
+  }
   if (opt_.tol > 0 && r.rel <= opt_.tol) {
     ph.msg = "relative improvement " + std::to_string(r.rel) + " <= tol";
     return true;
@@ -468,6 +475,9 @@ void Solver::Run::end_phase(Phase& ph) {
     sum_.relaxed_optimum = c.relaxed;
   }
   sum_.final_cost = objective_of(*ph.alg);
+  sum_.method_values.clear();
+  sum_.method_texts.clear();
+  ph.alg->report(&sum_.method_values, &sum_.method_texts);
   sum_.termination = ph.term;
   sum_.message = phases_.size() > 1 ? ph.alg->name() + ": " + ph.msg : ph.msg;
   sum_.converged = ph.term == TerminationType::kConvergence;
