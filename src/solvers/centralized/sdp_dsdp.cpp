@@ -75,9 +75,28 @@ void read_solution(DSDP dsdp, SDPCone cone, const SdpProblem& prob, const SdpOpt
   s.y.assign(prob.b.size(), 0.0);
   if (!s.y.empty()) check(DSDPGetY(dsdp, s.y.data(), static_cast<int>(s.y.size())), "DSDPGetY");
   s.primal_objective = s.dual_objective;
-  if (!opt.want_primal || !s.ok) return;
+  if (!s.ok) return;
+  // DSDP can call an unbounded dual (an infeasible primal) converged when y
+  // reaches its box: the primal residual and the box tell.
+  double ylo = 0, yhi = 0, ymax = 0, r = 0, pinf = 0, bmax = 0;
+  check(DSDPGetYBounds(dsdp, &ylo, &yhi), "DSDPGetYBounds");
+  check(DSDPGetYMaxNorm(dsdp, &ymax), "DSDPGetYMaxNorm");
+  check(DSDPGetR(dsdp, &r), "DSDPGetR");
   check(DSDPComputeX(dsdp), "DSDPComputeX");
+  check(DSDPGetPInfeasibility(dsdp, &pinf), "DSDPGetPInfeasibility");
+  for (double v : prob.b) bmax = std::max(bmax, std::abs(v));
+  if (ymax >= 0.5 * std::min(-ylo, yhi) || pinf > 1e-6 * (1 + bmax)) {
+    s.ok = false;
+    s.status = "primal infeasible (dual unbounded)";
+    return;
+  }
+  if (r > 1e-6) {
+    s.ok = false;
+    s.status = "dual infeasible";
+    return;
+  }
   check(DSDPGetPObjective(dsdp, &s.primal_objective), "DSDPGetPObjective");
+  if (!opt.want_primal) return;
   s.x.resize(prob.block_sizes.size());
   for (std::size_t j = 0; j < prob.block_sizes.size(); ++j) {
     double* xa = nullptr;
