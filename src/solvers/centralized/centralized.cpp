@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 
 #include "snl/core/mpi_util.hpp"
 #include "solvers/algorithm_util.hpp"
@@ -134,6 +135,8 @@ class CentralizedRelaxation final : public Algorithm {
       try {  // any failure here is rank 0's alone: it is told to every rank below
         test_fail_point("sdp");  // fault-injection tests
         const detail::SdpProblem sp = detail::build_relaxation(kind_, net);
+        // The solver benchmark (bench/sdp_backends.sh) times other solvers on the same SDP.
+        if (const char* dump = std::getenv("SNL_SDP_DUMP")) detail::write_sdpa(sp, dump);
         detail::SdpOptions o;
         o.want_primal = kind_ != RelaxationKind::kEsdp;
         const detail::SdpSolution s = detail::solve_sdp_dsdp(sp, o);
