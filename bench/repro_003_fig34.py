@@ -4,8 +4,9 @@ for EDM completion, the SDP relaxation, ESDP and the disk relaxation (003 eq. 6,
 Algorithm 1 to ||grad f_hat|| <= 1e-6), on one fixed 50-sensor network (the
 geometry of inputs/net50_s0.01.h5) with fresh noise (003 eq. 28) each trial.
 
-  /usr/bin/python3 bench/repro_003_fig34.py [SNL] [TRIALS]
-writes docs/data/repro_003_fig34.csv and docs/repro_003_fig3.png, docs/repro_003_fig4.png.
+  /usr/bin/python3 bench/repro_003_fig34.py [SNL] [TRIALS] [NETWORK TAG]
+writes docs/data/repro_003_fig34{TAG}.csv and docs/repro_003_fig3{TAG}.png, docs/repro_003_fig4{TAG}.png
+(network B: inputs/net50_allanchors_s0.01.h5 _B).
 """
 import csv, json, os, subprocess, sys, tempfile
 import h5py, numpy as np
@@ -13,7 +14,8 @@ import h5py, numpy as np
 SNL = sys.argv[1] if len(sys.argv) > 1 else "build/bin/snl"
 TRIALS = int(sys.argv[2]) if len(sys.argv) > 2 else 10
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-BASE = os.path.join(ROOT, "inputs", "net50_s0.01.h5")
+BASE = os.path.join(ROOT, sys.argv[3]) if len(sys.argv) > 3 else os.path.join(ROOT, "inputs", "net50_s0.01.h5")
+TAG = sys.argv[4] if len(sys.argv) > 4 else ""
 SIGMAS = [0.01, 0.05, 0.1, 0.3]
 METHODS = {
     "edm": ["--algorithm", "edm"],
@@ -42,7 +44,7 @@ def noisy_copy(src, dst, sigma, seed):
 
 
 def main():
-    out = os.path.join(ROOT, "docs", "data", "repro_003_fig34.csv")
+    out = os.path.join(ROOT, "docs", "data", "repro_003_fig34" + TAG + ".csv")
     rows = []
     with tempfile.TemporaryDirectory() as w:
         for si, sigma in enumerate(SIGMAS):
@@ -76,14 +78,14 @@ def plot(rows):
         ax.plot(SIGMAS, [np.sqrt(np.mean(np.square(agg(m, s, "rmse")))) for s in SIGMAS], "o-", label=m)
     ax.set_xlabel("sigma"), ax.set_ylabel("RMSE"), ax.legend(), ax.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(os.path.join(ROOT, "docs", "repro_003_fig3.png"), dpi=110)
+    fig.savefig(os.path.join(ROOT, "docs", "repro_003_fig3" + TAG + ".png"), dpi=110)
     fig, ax = plt.subplots(figsize=(5, 3.6))
     for m in METHODS:
         ax.plot(agg(m, 0.1, "solve_seconds"), agg(m, 0.1, "rmse"), "o", label=m, alpha=0.7)
     ax.set_xscale("log"), ax.set_xlabel("solve time [s] (shared 2-core machine)"), ax.set_ylabel("RMSE")
     ax.legend(), ax.grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(os.path.join(ROOT, "docs", "repro_003_fig4.png"), dpi=110)
+    fig.savefig(os.path.join(ROOT, "docs", "repro_003_fig4" + TAG + ".png"), dpi=110)
 
 
 if __name__ == "__main__":

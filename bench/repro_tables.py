@@ -48,3 +48,21 @@ def fig34():
 table000("repro_000_table1.csv")
 table000("repro_000_table1_B.csv")
 fig34()
+
+
+def backends():
+    p = os.path.join(D, "sdp_backends.csv")
+    if not os.path.exists(p):
+        return
+    t = defaultdict(dict)
+    for r in csv.DictReader(open(p)):
+        t[(int(r["sensors"]), r["relaxation"])][r["solver"]] = (r["seconds"], r["objective_or_status"])
+    print("\nSDP solvers: CPU seconds (status)")
+    print("| sensors | relaxation | DSDP in snl | DSDP executable | CSDP executable |")
+    print("|---|---|---|---|---|")
+    for k in sorted(t):
+        c = lambda s: "%s (%s)" % t[k][s] if s in t[k] else "-"
+        print(f"| {k[0]} | {k[1]} | {c('dsdp-in-snl')} | {c('dsdp5-exe')} | {c('csdp-exe')} |")
+
+
+backends()
