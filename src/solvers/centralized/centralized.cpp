@@ -24,7 +24,7 @@ using detail::RelaxationKind;
 
 // Largest networks accepted, by measurement on this project's 2-core machine
 // (docs/reproduction.md, "The SDP solver"): beyond these DSDP takes minutes.
-constexpr GlobalId kMaxSensors[] = {400, 1000, 400};  // sdp, esdp, edm
+constexpr GlobalId kMaxSensors[] = {300, 1000, 300};  // sdp, esdp, edm
 
 // Concatenation of every rank's doubles on rank 0 of comm (empty elsewhere).
 std::vector<double> gather_doubles(MPI_Comm comm, const std::vector<double>& mine) {
