@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # CPU seconds of snl's DSDP relaxations at the size limit (300 sensors for all
 # three) and ESDP at 500, where DSDP fails; average degree 8, sigma 0.05.
-#   bench/sdp_limits.sh [SNL] >> docs/data/sdp_backends.csv
+#   bench/sdp_limits.sh [SNL] > docs/data/sdp_limits.csv
 set -euo pipefail
 SNL=${1:-build/bin/snl}
 W=$(mktemp -d /tmp/snl_sdpl.XXXXXX)
