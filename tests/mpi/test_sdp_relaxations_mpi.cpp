@@ -123,15 +123,15 @@ TEST(SdpRelaxations, InfeasibleSdpIsAFailure) {
 }
 
 TEST(SdpRelaxations, RefusesNetworksAboveTheLimit) {
-  const Network w = make_network({.n = 301, .dim = 2, .radius = 0.12, .anchor_radius = 0.2, .sigma = 0.01});
+  const Network w = make_network({.n = 201, .dim = 2, .radius = 0.15, .anchor_radius = 0.2, .sigma = 0.01});
   LocalizationProblem prob(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kBlock, nullptr);
   SolverOptions opt;
   opt.algorithm = "sdp";
   Solver solver(prob, opt);
   try {
     solver.solve(random_initial_positions(prob, 3), nullptr);
-    FAIL() << "a 301-sensor network was accepted";
+    FAIL() << "a 201-sensor network was accepted";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("at most 300 sensors"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("at most 200 sensors"), std::string::npos) << e.what();
   }
 }

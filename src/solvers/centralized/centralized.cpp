@@ -23,9 +23,9 @@ using detail::GatheredNetwork;
 using detail::RelaxationKind;
 
 // Largest networks accepted, by measurement on this project's 2-core machine
-// (docs/reproduction.md, "The SDP solver"): beyond, DSDP takes minutes (sdp,
-// edm) or fails (esdp: "small steps" at 500 sensors).
-constexpr GlobalId kMaxSensors[] = {300, 300, 300};  // sdp, esdp, edm
+// (docs/reproduction.md, "The SDP solver"): beyond, DSDP takes minutes or
+// fails (sdp at 300 sensors, esdp at 500).
+constexpr GlobalId kMaxSensors[] = {200, 300, 300};  // sdp, esdp, edm
 
 // Concatenation of every rank's doubles on rank 0 of comm (empty elsewhere).
 std::vector<double> gather_doubles(MPI_Comm comm, const std::vector<double>& mine) {
