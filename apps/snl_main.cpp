@@ -252,6 +252,9 @@ int run_guarded(Commands& c, MPI_Comm comm) {
   } catch (const snl::UsageError& err) {
     // An option the algorithm cannot honour: refused before anything is read or written.
     return fail(comm, err.what(), snl::kExitUsage);
+  } catch (const snl::NumericalFailure& err) {
+    // A method found no solution (raised identically on every rank): status 4, no output.
+    return fail(comm, err.what(), 4);
   } catch (const snl::Error& err) {
     // snl::Error is raised identically on every rank: one message, clean exit.
     return fail(comm, err.what(), 1);

@@ -10,7 +10,7 @@ shift || true
 # slurm-wlm and munge: tests/slurm runs the job scripts of jobs/ under a private
 # one-node Slurm that it starts and stops itself (it never uses a system-wide one).
 PKGS=(build-essential cmake ninja-build pkg-config openmpi-bin libopenmpi-dev libhdf5-openmpi-dev hdf5-tools
-      libeigen3-dev libmetis-dev libscotchparmetis-dev libptscotch-dev libgtest-dev libgmock-dev libcli11-dev libbenchmark-dev
+      libeigen3-dev libmetis-dev libscotchparmetis-dev libptscotch-dev libdsdp-dev libgtest-dev libgmock-dev libcli11-dev libbenchmark-dev
       python3-numpy python3-h5py python3-matplotlib clang libclang-rt-14-dev
       slurm-wlm munge)
 missing=()

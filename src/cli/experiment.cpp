@@ -61,6 +61,9 @@ void check_experiment_command(const ExperimentCommand& cmd, MPI_Comm comm) {
   for (const auto& a : cmd.algorithms)
     if (!find_algorithm(a) || find_algorithm(a)->phases.size() != 1)
       throw Error("--algorithms takes " + algorithm_names(", ", "", true));
+  for (const auto& a : cmd.algorithms)
+    if (find_algorithm(a)->one_shot)
+      throw Error("--algorithms " + a + ": a centralized relaxation has no communications to budget (run it with snl solve)");
   if (cmd.start != "relaxation" && cmd.start != "random") throw Error("--start must be relaxation or random");
   // The relaxation rows are the starting points: a second run labelled the
   // same would be mixed into the same aggregate row (twice the trials).

@@ -72,6 +72,10 @@ PartitionMethod check_solve_command(const SolveCommand& cmd, MPI_Comm comm) {
   if (cmd.check_monotone_given && alg && !alg->monotone_surrogate)
     throw UsageError("--check-monotone is not honoured by --algorithm " + cmd.solver.algorithm + " (only by " +
                      algorithms_with(&AlgorithmInfo::monotone_surrogate) + "); leave it out");
+  if (alg && alg->one_shot && (cmd.init != "random" || !cmd.checkpoint.empty() || !cmd.restart.empty()))
+    throw UsageError(std::string(cmd.init != "random" ? "--init FILE" : "--checkpoint/--restart") +
+                     " is not honoured by --algorithm " + cmd.solver.algorithm +
+                     " (a convex relaxation solved once: it needs no start and has no iterations to resume)");
   const std::string bad = cmd.solver.validate();
   if (!bad.empty()) throw Error(bad);
   const PartitionMethod pm = parse_partition_method(cmd.partition);
@@ -224,6 +228,8 @@ void write_result_file(const SolveCommand& cmd, const LoadedProblem& lp, const S
     r.double_attrs.push_back({"rmse", s.errors.rmse});
     r.double_attrs.push_back({"mpe", s.errors.mpe});
   }
+  r.double_attrs.insert(r.double_attrs.end(), s.method_values.begin(), s.method_values.end());
+  r.string_attrs.insert(r.string_attrs.end(), s.method_texts.begin(), s.method_texts.end());
   write_result(cmd.output, comm, r);
 }
 
@@ -328,6 +334,8 @@ std::string json_summary(const SolveCommand& cmd, const LoadedProblem& lp, const
     if (!std::isfinite(s.errors.rmse_localizable))  // null above: over an empty set
       j.add("localizable_metrics_reason", "no sensor can be localized");
   }
+  for (const auto& v : s.method_values) j.add(v.first, v.second);
+  for (const auto& v : s.method_texts) j.add(v.first, v.second);
   return j.str();
 }
 

@@ -18,5 +18,9 @@ std::unique_ptr<Algorithm> make_async_exact(LocalizationProblem& prob, const Sol
 /// and make_mm return these when prob.model().active().
 std::unique_ptr<Algorithm> make_model_relaxation(LocalizationProblem& prob);
 std::unique_ptr<Algorithm> make_model_mm(LocalizationProblem& prob);
+std::unique_ptr<Algorithm> make_bb_calafiore(LocalizationProblem& prob, const SolverOptions& opt);  // bb_calafiore.cpp
+std::unique_ptr<Algorithm> make_sdp(LocalizationProblem& prob, const SolverOptions& opt);   // centralized/centralized.cpp
+std::unique_ptr<Algorithm> make_esdp(LocalizationProblem& prob, const SolverOptions& opt);  // centralized/centralized.cpp
+std::unique_ptr<Algorithm> make_edm(LocalizationProblem& prob, const SolverOptions& opt);   // centralized/centralized.cpp
 
 }  // namespace snl::detail

@@ -1,5 +1,7 @@
 #include "snl/solvers/registry.hpp"
 
+#include <algorithm>
+
 #include "snl/solvers/solver.hpp"
 #include "solvers/methods.hpp"
 
@@ -33,6 +35,15 @@ const std::vector<AlgorithmInfo> kRegistry = {
      false, false, false, false, false, false, true},
     {A::kAsyncExact, "async-exact", 5, detail::make_async_exact, {A::kAsyncExact},
      false, false, false, false, false, false, true},
+    {A::kBBCalafiore, "bb-calafiore", 10, detail::make_bb_calafiore, {A::kBBCalafiore},
+     true, false, true, true, false, false, false, false},
+    // The centralized SDP relaxations (solvers/centralized/), solved once by DSDP on rank 0.
+    {A::kSdp, "sdp", 7, detail::make_sdp, {A::kSdp},
+     true, false, false, false, false, false, false, true},
+    {A::kEsdp, "esdp", 8, detail::make_esdp, {A::kEsdp},
+     true, false, false, false, false, false, false, true},
+    {A::kEdm, "edm", 11, detail::make_edm, {A::kEdm},
+     true, false, false, false, false, false, false, true},
 };
 
 }  // namespace
@@ -88,9 +99,12 @@ const char* algorithm_name(int code) {
   return a ? a->name : "?";
 }
 
-std::string algorithm_codes_legend() {  // codes are 0, 1, 2, ... without gaps
+std::string algorithm_codes_legend() {  // ascending codes; 9 is "anything else"
+  int top = 0;
+  for (const auto& a : kRegistry) top = std::max(top, a.code);
   std::string out;
-  for (int c = 0; find_code(c); ++c) out += (c > 0 ? " " : "") + std::to_string(c) + "=" + find_code(c)->name;
+  for (int c = 0; c <= top; ++c)
+    if (find_code(c)) out += (out.empty() ? "" : " ") + std::to_string(c) + "=" + find_code(c)->name;
   return out;
 }
 

@@ -80,6 +80,9 @@ std::string SolverOptions::unsupported_option() const {
       {weights != defaults.weights && weights != "none", "--weights", &AlgorithmInfo::measurement_model, "none"},
       {loss != defaults.loss, "--loss", &AlgorithmInfo::measurement_model, "l2"},
   };
+  if (a->one_shot && (tol != defaults.tol || max_iter != defaults.max_iter))
+    return std::string(tol != defaults.tol ? "--tol" : "--max-iter") + " is not honoured by --algorithm " +
+           algorithm + " (a convex relaxation solved once by an SDP solver, to its own tolerance); leave it out";
   for (const auto& c : checks)
     if (c.set && !(c.capability == &AlgorithmInfo::measurement_model ? honours_model(*a, *this) : a->*c.capability))
       return std::string(c.option) + " is not honoured by --algorithm " + algorithm + " (only by " +
@@ -466,6 +469,10 @@ double Solver::Run::relative_gradient(Phase& ph) {
 }
 
 bool Solver::Run::test_stop(Phase& ph, const PassResult& r) const {
+  if (ph.info->one_shot) {
+    ph.msg = "solved";
+    return true;
+  }
   if (opt_.stop == "gradient") {
     if (r.rel_grad <= opt_.stop_tol()) {  // NaN (not tested here) compares false
       ph.msg = "relative gradient " + std::to_string(r.rel_grad) + " <= tol";
@@ -567,6 +574,9 @@ void Solver::Run::end_phase(Phase& ph) {
     sum_.relaxed_optimum = c.relaxed;
   }
   sum_.final_cost = objective_of(*ph.alg);
+  sum_.method_values.clear();
+  sum_.method_texts.clear();
+  ph.alg->report(&sum_.method_values, &sum_.method_texts);
   sum_.termination = ph.term;
   sum_.message = phases_.size() > 1 ? ph.alg->name() + ": " + ph.msg : ph.msg;
   sum_.converged = ph.term == TerminationType::kConvergence;

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Options only some algorithms honour (--grad-tol, --temporal-block, --bb-rounds),
 # against every algorithm. The expected capabilities are written out here, from
-# what the methods do (a gradient norm: relaxation and BB; several iterations per
-# pass: relaxation and MM; consensus rounds: BB), independently of the registry:
+# what the methods do (a gradient norm: relaxation and both BBs; several iterations per
+# pass: relaxation and MM; consensus rounds: both BBs), independently of the registry
+# (the centralized relaxations, which refuse all three, are tested in sdp_relaxations.sh):
 #  - refused pair: exit 2 with one "snl: error:" line naming the option, on 1 and
 #    2 ranks, an existing output left untouched and no JSON written; the
 #    option at its default value is accepted;
@@ -14,11 +15,11 @@ source "$(dirname "$0")/common.bash"
 "$SNL" solve "$T/net.h5" -o "$T/keep.h5" --max-iter 5 --tol 0 -q
 sum0=$(md5sum < "$T/keep.h5")
 
-ALGS="relaxation mm mm-accel pipeline bb pm async async-exact"
+ALGS="relaxation mm mm-accel pipeline bb bb-calafiore pm async async-exact"
 declare -A HONOURED=(
-  [grad-tol]="relaxation pipeline bb"
+  [grad-tol]="relaxation pipeline bb bb-calafiore"
   [temporal-block]="relaxation mm pipeline"
-  [bb-rounds]="bb"
+  [bb-rounds]="bb bb-calafiore"
 )
 declare -A VALUE=([grad-tol]=1e6 [temporal-block]=4 [bb-rounds]=5)
 declare -A DEFAULT=([grad-tol]=0 [temporal-block]=1 [bb-rounds]=20)

@@ -18,4 +18,11 @@ class Error : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// A numerical method found no solution (an SDP solver's failure or an
+/// infeasible SDP): the command exits with status 4 and writes nothing.
+class NumericalFailure : public Error {
+ public:
+  using Error::Error;
+};
+
 }  // namespace snl

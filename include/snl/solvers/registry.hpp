@@ -13,7 +13,7 @@ class Algorithm;
 class LocalizationProblem;
 struct SolverOptions;
 
-enum class AlgorithmId { kRelaxation, kMM, kPipeline, kBB, kPM, kAsync, kAsyncExact, kMMAccel };
+enum class AlgorithmId { kRelaxation, kMM, kPipeline, kBB, kPM, kAsync, kAsyncExact, kMMAccel, kSdp, kEsdp, kEdm, kBBCalafiore };
 
 struct AlgorithmInfo {
   AlgorithmId id;
@@ -33,6 +33,9 @@ struct AlgorithmInfo {
   bool monotone_surrogate; ///< --check-monotone verifies its objective (the MM surrogate) never increases
   bool gap_certificate;    ///< where it ends, the 003 eq. 22 certificate is valid (a minimizer of f_hat)
   bool measurement_model = false;  ///< honours --weights and --loss (weights.hpp)
+  /// Solved in one step (the centralized SDP relaxations): the Solver stops after
+  /// its first iteration; --tol, --max-iter, --init FILE and checkpoints are refused.
+  bool one_shot = false;
 };
 
 /// Every method, in the order of the CLI help.
@@ -50,7 +53,8 @@ std::string algorithm_names(const std::string& sep, const std::string& last_sep 
 std::string algorithms_with(bool AlgorithmInfo::*capability);
 
 /// Numeric codes of the algorithms in history/checkpoint/experiment files:
-/// 0=relaxation 1=mm 2=bb 3=pm 4=async 5=async-exact 6=mm-accel (9 for anything else).
+/// 0=relaxation 1=mm 2=bb 3=pm 4=async 5=async-exact 6=mm-accel 7=sdp 8=esdp 10=bb-calafiore 11=edm
+/// (9 for anything else).
 int algorithm_code(const std::string& name);
 const char* algorithm_name(int code);  ///< inverse of algorithm_code ("?" if unknown)
 /// "0=relaxation 1=mm ...": the legend written next to the codes in files.

@@ -135,6 +135,9 @@ struct Summary {
   /// Per phase: modelled memory traffic of one iteration, all ranks (bytes).
   std::vector<std::pair<std::string, double>> phase_traffic_bytes;
   double lipschitz = NAN;
+  /// What the last phase's method reports beyond these (Algorithm::report).
+  std::vector<std::pair<std::string, double>> method_values;
+  std::vector<std::pair<std::string, std::string>> method_texts;
   int ranks = 1;
   std::vector<IterationSummary> history;
   std::string brief_report() const;
@@ -184,6 +187,11 @@ class Algorithm {
   /// array streamed once, gathered neighbour rows once (the model of
   /// docs/performance.md, for the bandwidth bound); NaN if not modelled.
   virtual double traffic_bytes_per_iteration() const { return std::numeric_limits<double>::quiet_NaN(); }
+  /// Values the method reports beyond the common ones (the SDP relaxations: their
+  /// objective, the solver's status and time), the same on every rank; they go to
+  /// the result file's attributes and the JSON summary.
+  virtual void report(std::vector<std::pair<std::string, double>>* /*values*/,
+                      std::vector<std::pair<std::string, std::string>>* /*texts*/) const {}
   /// Collective. Everything needed to continue bit for bit (after start()).
   virtual void save(StateWriter& w) const = 0;
   virtual void load(const StateReader& r) = 0;
