@@ -125,15 +125,16 @@ void print_problem_report(const LocalizationProblem& prob, const ProblemReport& 
 
 // After a run stopped by --max-iter with a tolerance set: how far from it, and what to change.
 void report_iteration_cap(const SolveCommand& cmd, const Summary& s) {
-  if (s.termination != TerminationType::kNoConvergence || !(cmd.solver.tol > 0) || s.history.empty()) return;
+  const double tol = cmd.solver.stop_tol();
+  if (s.termination != TerminationType::kNoConvergence || !(tol > 0) || s.history.empty()) return;
   const IterationSummary& last = s.history.back();
   std::fprintf(stderr, "snl solve: the %s phase stopped at --max-iter %lld ", last.phase.c_str(),
                static_cast<long long>(cmd.solver.max_iter));
-  if (std::isfinite(last.rel_change) && last.rel_change > 0)
-    std::fprintf(stderr, "with relative change %.3g, %.3g times --tol %.3g", last.rel_change,
-                 last.rel_change / cmd.solver.tol, cmd.solver.tol);
+  if (cmd.solver.stop == "papers" && std::isfinite(last.rel_change) && last.rel_change > 0)
+    std::fprintf(stderr, "with relative change %.3g, %.3g times --tol %.3g", last.rel_change, last.rel_change / tol,
+                 tol);
   else
-    std::fprintf(stderr, "before --tol %.3g was met", cmd.solver.tol);
+    std::fprintf(stderr, "before its stopping rule (--stop %s, --tol %.3g) was met", cmd.solver.stop.c_str(), tol);
   std::fprintf(stderr,
                ". To converge, raise --max-iter (or resume with --checkpoint/--restart), or loosen --tol; if many "
                "sensors cannot be localized (see above), fix the network instead.\n");
@@ -170,7 +171,9 @@ std::vector<double> initial_positions(const SolveCommand& cmd, const Localizatio
 void report_restart(const SolveCommand& cmd, const LoadedProblem& lp, bool talk, MPI_Comm comm) {
   if (cmd.restart.empty()) return;
   const H5File f(cmd.restart, comm, H5File::Mode::kRead);
-  const CheckpointHeader h = read_checkpoint_header(f, lp.fingerprint, checkpoint_options(cmd.solver));
+  const CheckpointHeader h = read_checkpoint_header(
+      f, lp.fingerprint,
+      checkpoint_options(cmd.solver.resolved_for(lp.prob->has_sensor_sigmas() || lp.prob->has_anchor_sigmas())));
   if (talk)
     std::fprintf(stderr, "snl solve: resuming from %s at %s iteration %lld (total iteration %lld)\n",
                  cmd.restart.c_str(), h.phase_algorithm.c_str(), static_cast<long long>(h.phase_iteration),

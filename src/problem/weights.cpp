@@ -75,17 +75,22 @@ void LocalizationProblem::set_measurement_model(const WeightsSpec& spec, double 
   model_ = MeasurementModel();
   model_.huber_delta = huber_delta;
   WeightsSpec::Kind kind = spec.kind;
+  // A side without per-measurement sigmas takes the network's sigma; without
+  // that, file weights are incomplete: refused when asked for, none for auto.
+  const bool complete = (has_sensor_sigmas_ || sigma_) && (has_anchor_sigmas_ || sigma_);
   if (kind == WeightsSpec::Kind::kAuto)
-    kind = has_sensor_sigmas_ || has_anchor_sigmas_ ? WeightsSpec::Kind::kFile : WeightsSpec::Kind::kNone;
+    kind = (has_sensor_sigmas_ || has_anchor_sigmas_) && complete ? WeightsSpec::Kind::kFile : WeightsSpec::Kind::kNone;
   const std::size_t ns = graph_.adjacency().size(), na = anchor_ranges_.size();
   std::vector<double> ss, as;
   if (kind == WeightsSpec::Kind::kFile) {
     if (!has_sensor_sigmas_ && !has_anchor_sigmas_)
       throw Error("--weights file: the network has no sensor_sigmas/anchor_sigmas datasets");
-    if (!has_sensor_sigmas_) throw Error("--weights file: the network has anchor_sigmas but no sensor_sigmas");
-    if (!has_anchor_sigmas_) throw Error("--weights file: the network has sensor_sigmas but no anchor_sigmas");
-    ss = sensor_sigmas_;
-    as = anchor_sigmas_;
+    if (!complete)
+      throw Error(std::string("--weights file: the network has ") +
+                  (has_sensor_sigmas_ ? "sensor_sigmas but no anchor_sigmas" : "anchor_sigmas but no sensor_sigmas") +
+                  " and no network sigma to stand in for them");
+    ss = has_sensor_sigmas_ ? sensor_sigmas_ : std::vector<double>(ns, *sigma_);
+    as = has_anchor_sigmas_ ? anchor_sigmas_ : std::vector<double>(na, *sigma_);
   } else if (kind == WeightsSpec::Kind::kMultiplicative) {
     double rmax = 0;
     for (std::size_t e = 0; e < ns; ++e) rmax = std::max(rmax, graph_.edge_value(std::int64_t(e)));

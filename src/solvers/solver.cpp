@@ -80,8 +80,10 @@ std::string SolverOptions::unsupported_option() const {
       {weights != defaults.weights && weights != "none", "--weights", &AlgorithmInfo::measurement_model, "none"},
       {loss != defaults.loss, "--loss", &AlgorithmInfo::measurement_model, "l2"},
   };
-  if (a->one_shot && (tol != defaults.tol || max_iter != defaults.max_iter))
-    return std::string(tol != defaults.tol ? "--tol" : "--max-iter") + " is not honoured by --algorithm " +
+  // tol's default is NaN (the stopping rule's own default): "given" means not NaN.
+  const bool tol_given = !std::isnan(tol);
+  if (a->one_shot && (tol_given || max_iter != defaults.max_iter))
+    return std::string(tol_given ? "--tol" : "--max-iter") + " is not honoured by --algorithm " +
            algorithm + " (a convex relaxation solved once by an SDP solver, to its own tolerance); leave it out";
   for (const auto& c : checks)
     if (c.set && !(c.capability == &AlgorithmInfo::measurement_model ? honours_model(*a, *this) : a->*c.capability))
@@ -91,6 +93,13 @@ std::string SolverOptions::unsupported_option() const {
     return "--refine is not honoured by --algorithm " + algorithm + " (only by pipeline); leave it out or give its default " +
            defaults.refine;
   return "";
+}
+
+SolverOptions SolverOptions::resolved_for(bool network_has_sigmas) const {
+  SolverOptions o = *this;
+  const AlgorithmInfo* a = find_algorithm(algorithm);
+  if (a && a->id == AlgorithmId::kPipeline) o.refine = resolved_refine(model_in_effect(*this, network_has_sigmas));
+  return o;
 }
 
 std::vector<AlgorithmId> SolverOptions::phases() const {
@@ -122,9 +131,7 @@ Solver::Solver(LocalizationProblem& prob, SolverOptions opt) : prob_(prob), opt_
   if (!err.empty()) throw Error(err);
   // The measurement model every phase and cost uses; --weights auto means
   // none for a method that cannot honour weights (explicit values are refused).
-  const bool sigmas = prob_.has_sensor_sigmas() || prob_.has_anchor_sigmas();
-  if (find_algorithm(opt_.algorithm)->id == AlgorithmId::kPipeline)
-    opt_.refine = opt_.resolved_refine(model_in_effect(opt_, sigmas));
+  opt_ = opt_.resolved_for(prob_.has_sensor_sigmas() || prob_.has_anchor_sigmas());
   WeightsSpec ws = parse_weights_spec(opt_.weights);
   if (!honours_model(*find_algorithm(opt_.algorithm), opt_)) ws.kind = WeightsSpec::Kind::kNone;
   prob_.set_measurement_model(ws, parse_loss_spec(opt_.loss));
