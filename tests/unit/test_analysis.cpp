@@ -10,46 +10,15 @@
 #include "snl/problem/analysis.hpp"
 #include "snl/problem/generate.hpp"
 
+#include "network_builder.hpp"
+
 namespace {
 
 using snl::GlobalId;
 using snl::Network;
 
-// A 2D network built by hand; ranges exact.
-struct Builder {
-  Network net;
-  explicit Builder(std::vector<double> truth, std::vector<double> anchors, int dim = 2) {
-    net.dim = dim;
-    net.num_sensors = static_cast<GlobalId>(truth.size()) / dim;
-    net.truth = std::move(truth);
-    net.has_truth = true;
-    net.anchors = std::move(anchors);
-  }
-  double dist(const double* a, const double* b) const {
-    double s = 0;
-    for (int d = 0; d < net.dim; ++d) s += (a[d] - b[d]) * (a[d] - b[d]);
-    return std::sqrt(s);
-  }
-  Builder& s(GlobalId i, GlobalId j) {
-    net.sensor_edges.push_back(i);
-    net.sensor_edges.push_back(j);
-    net.sensor_ranges.push_back(dist(&net.truth[i * net.dim], &net.truth[j * net.dim]));
-    return *this;
-  }
-  Builder& a(GlobalId i, GlobalId k) {
-    net.anchor_edges.push_back(i);
-    net.anchor_edges.push_back(k);
-    net.anchor_ranges.push_back(dist(&net.truth[i * net.dim], &net.anchors[k * net.dim]));
-    return *this;
-  }
-  Network done() {
-    net.total_sensor_edges = net.local_sensor_edges();
-    net.total_anchor_edges = net.local_anchor_edges();
-    return net;
-  }
-};
-
-const std::vector<double> kCorners = {0, 0, 1, 0, 0, 1, 1, 1};
+using Builder = snl::test::NetworkBuilder;
+using snl::test::kCorners;
 
 // Dense reference: tr(J^-1)/n with J of the spec (sigma = 1), from the rows as given.
 double dense_crlb(const Network& net, double sigma) {
