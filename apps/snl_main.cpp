@@ -267,6 +267,121 @@ int run_guarded(Commands& c, MPI_Comm comm) {
   return 1;  // not reached: abort_all does not return
 }
 
+}  // namespace
+
+// The options of `snl consensus generate|solve` (docs/consensus.md). They live
+// here, beside the other subcommands' options, so that CLI11 (header-only) is
+// compiled in one translation unit.
+namespace snl {
+namespace {
+
+int consensus_generate_main(const std::vector<std::string>& args, MPI_Comm comm) {
+  const bool root = comm_rank(comm) == 0;
+  ConsensusGenerateCommand cmd;
+  std::string family = "exp";
+  CLI::App app{"generate a random consensus problem (HDF5, format snl-consensus)", "snl consensus generate"};
+  app.add_option("-o,--output", cmd.output, "output problem file")->required();
+  app.add_option("--nodes", cmd.options.nodes, "number of nodes n")->required();
+  app.add_option("--avg-degree", cmd.options.avg_degree, "average degree of the random geometric graph")
+      ->capture_default_str();
+  app.add_option("--family", family, "exp|quadratic|logistic")->capture_default_str();
+  app.add_option("--dim", cmd.options.dim, "size q of x (1 for exp)")->capture_default_str();
+  app.add_flag("--hamiltonian", cmd.options.hamiltonian, "plant a Hamilton path (stored in truth_path)");
+  app.add_option("--seed", cmd.options.seed, "random seed")->capture_default_str();
+  app.add_option("--samples-per-node", cmd.options.samples_per_node, "logistic: samples owned by each node")
+      ->capture_default_str();
+  app.add_option("--lambda", cmd.options.lambda, "logistic: regularisation weight (> 0)")->capture_default_str();
+  app.add_flag("-q,--quiet", cmd.quiet, "print nothing on success");
+
+  // Bad options (exit 2): parse errors, unknown family, option rules.
+  try {
+    std::vector<std::string> rev(args.rbegin(), args.rend());  // CLI11 takes them reversed
+    app.parse(rev);
+    if (family != "exp" && family != "quadratic" && family != "logistic")
+      throw Error("--family must be exp, quadratic or logistic (got '" + family + "')");
+    cmd.options.family = consensus::parse_family(family);
+    cmd.options.validate();
+  } catch (const CLI::CallForHelp&) {
+    if (root) std::printf("%s", app.help().c_str());
+    return 0;
+  } catch (const CLI::ParseError& e) {
+    if (root) std::fprintf(stderr, "snl: error: %s (see snl consensus generate --help)\n", e.what());
+    return 2;
+  } catch (const Error& e) {
+    if (root) std::fprintf(stderr, "snl: error: %s\n", e.what());
+    return 2;
+  }
+  try {
+    run_consensus_generate(cmd, comm);
+  } catch (const Error& e) {
+    if (root) std::fprintf(stderr, "snl: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
+
+int consensus_solve_main(const std::vector<std::string>& args, MPI_Comm comm) {
+  const bool root = comm_rank(comm) == 0;
+  ConsensusSolveCommand cmd;
+  auto& o = cmd.solver;
+  std::string dual;
+  std::int64_t max_iter = 0, dual_max_iter = 0;
+  double tol = 0, dual_tol = 0, step = 0;
+  CLI::App app{"solve a consensus problem with a distributed method (run under mpirun)", "snl consensus solve"};
+  app.add_option("problem", cmd.problem, "problem file (snl-consensus)")->required();
+  app.add_option("-o,--output", cmd.output, "result file (snl-consensus-result)")->required();
+  app.add_option("--method", o.method, "newton-tree|newton-path|subgradient|incremental|central")
+      ->capture_default_str();
+  auto* o_dual = app.add_option("--dual", dual, "Newton's dual solver: splitting (default) or exact");
+  auto* o_max = app.add_option("--max-iter", max_iter, "primal iterations (default 100; baselines 1000)");
+  auto* o_dmax = app.add_option("--dual-max-iter", dual_max_iter, "dual iterations per Newton step (default 10000)");
+  auto* o_tol = app.add_option("--tol", tol,
+                               "Newton/central: stop when the decrement <= tol (default 1e-10); baselines: when the "
+                               "running average's max error <= tol (default 0: run --max-iter)");
+  auto* o_dtol = app.add_option("--dual-tol", dual_tol,
+                                "splitting: stop when max|w(t+1)-w(t)| <= dual-tol max|w(t+1)| (default 1e-12)");
+  auto* o_step = app.add_option("--step", step, "baselines: alpha0 of the step alpha0/sqrt(k+1) (default 0.1)");
+  app.add_option("--partition", o.partition, "metis|block")->capture_default_str();
+  app.add_option("--json", cmd.json, "write a JSON summary");
+  app.add_option("--checkpoint", cmd.checkpoint, "write checkpoints to this file (atomically replaced)");
+  app.add_option("--checkpoint-every", cmd.checkpoint_every, "checkpoint every K primal iterations");
+  app.add_option("--restart", cmd.restart, "resume from a checkpoint (any number of ranks)");
+  app.add_option("--progress-seconds", cmd.progress_seconds, "seconds between progress lines")->capture_default_str();
+  app.add_flag("-q,--quiet", cmd.quiet, "no progress output");
+  try {
+    std::vector<std::string> rev(args.rbegin(), args.rend());  // CLI11 takes them reversed
+    app.parse(rev);
+    if (o_dual->count()) o.dual = dual;
+    if (o_max->count()) o.max_iter = max_iter;
+    if (o_dmax->count()) o.dual_max_iter = dual_max_iter;
+    if (o_tol->count()) o.tol = tol;
+    if (o_dtol->count()) o.dual_tol = dual_tol;
+    if (o_step->count()) o.step = step;
+    const std::string bad = o.validate();
+    if (!bad.empty()) throw Error(bad);
+  } catch (const CLI::CallForHelp&) {
+    if (root) std::printf("%s", app.help().c_str());
+    return 0;
+  } catch (const CLI::ParseError& e) {
+    if (root) std::fprintf(stderr, "snl: error: %s (see snl consensus solve --help)\n", e.what());
+    return 2;
+  } catch (const Error& e) {
+    if (root) std::fprintf(stderr, "snl: error: %s\n", e.what());
+    return 2;
+  }
+  try {
+    return run_consensus_solve(cmd, comm);
+  } catch (const Error& e) {
+    if (root) std::fprintf(stderr, "snl: error: %s\n", e.what());
+    return 1;
+  }
+}
+
+}  // namespace
+}  // namespace snl
+
+namespace {
+
 // `snl consensus generate|solve ...` (seed 001): those commands parse their own
 // options; failures become one message and an exit status, as in run_guarded.
 int run_consensus(int argc, char** argv, MPI_Comm comm) {

@@ -1,5 +1,4 @@
 // `snl consensus generate`: a random consensus problem file (docs/consensus.md).
-#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
 #include <iomanip>
@@ -48,51 +47,6 @@ void run_consensus_generate(const ConsensusGenerateCommand& cmd, MPI_Comm comm) 
     summary = summary_line(cmd, d, rep, t1 - t0, MPI_Wtime() - t1);
   });
   if (comm_rank(comm) == 0 && !cmd.quiet) std::printf("%s\n", summary.c_str());
-}
-
-int consensus_generate_main(const std::vector<std::string>& args, MPI_Comm comm) {
-  const bool root = comm_rank(comm) == 0;
-  ConsensusGenerateCommand cmd;
-  std::string family = "exp";
-  CLI::App app{"generate a random consensus problem (HDF5, format snl-consensus)", "snl consensus generate"};
-  app.add_option("-o,--output", cmd.output, "output problem file")->required();
-  app.add_option("--nodes", cmd.options.nodes, "number of nodes n")->required();
-  app.add_option("--avg-degree", cmd.options.avg_degree, "average degree of the random geometric graph")
-      ->capture_default_str();
-  app.add_option("--family", family, "exp|quadratic|logistic")->capture_default_str();
-  app.add_option("--dim", cmd.options.dim, "size q of x (1 for exp)")->capture_default_str();
-  app.add_flag("--hamiltonian", cmd.options.hamiltonian, "plant a Hamilton path (stored in truth_path)");
-  app.add_option("--seed", cmd.options.seed, "random seed")->capture_default_str();
-  app.add_option("--samples-per-node", cmd.options.samples_per_node, "logistic: samples owned by each node")
-      ->capture_default_str();
-  app.add_option("--lambda", cmd.options.lambda, "logistic: regularisation weight (> 0)")->capture_default_str();
-  app.add_flag("-q,--quiet", cmd.quiet, "print nothing on success");
-
-  // Bad options (exit 2): parse errors, unknown family, option rules.
-  try {
-    std::vector<std::string> rev(args.rbegin(), args.rend());  // CLI11 takes them reversed
-    app.parse(rev);
-    if (family != "exp" && family != "quadratic" && family != "logistic")
-      throw Error("--family must be exp, quadratic or logistic (got '" + family + "')");
-    cmd.options.family = consensus::parse_family(family);
-    cmd.options.validate();
-  } catch (const CLI::CallForHelp&) {
-    if (root) std::printf("%s", app.help().c_str());
-    return 0;
-  } catch (const CLI::ParseError& e) {
-    if (root) std::fprintf(stderr, "snl: error: %s (see snl consensus generate --help)\n", e.what());
-    return 2;
-  } catch (const Error& e) {
-    if (root) std::fprintf(stderr, "snl: error: %s\n", e.what());
-    return 2;
-  }
-  try {
-    run_consensus_generate(cmd, comm);
-  } catch (const Error& e) {
-    if (root) std::fprintf(stderr, "snl: error: %s\n", e.what());
-    return 1;
-  }
-  return 0;
 }
 
 }  // namespace snl

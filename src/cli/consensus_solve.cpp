@@ -1,7 +1,6 @@
 // `snl consensus solve`: the distributed solvers of seed 001 on a problem file
 // (docs/distributed-newton.md): result file snl-consensus-result, --json summary,
 // progress on rank 0, checkpoints and stop signals as `snl solve`.
-#include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
 #include <sstream>
@@ -169,63 +168,6 @@ int run_consensus_solve(const ConsensusSolveCommand& cmd, MPI_Comm comm) {
                  s.max_abs_error, s.objective, s.messages_per_node, s.reals_per_node, s.wall_seconds, s.ranks);
   }
   return s.termination == "FAILURE" ? 4 : 0;
-}
-
-int consensus_solve_main(const std::vector<std::string>& args, MPI_Comm comm) {
-  const bool root = comm_rank(comm) == 0;
-  ConsensusSolveCommand cmd;
-  auto& o = cmd.solver;
-  std::string dual;
-  std::int64_t max_iter = 0, dual_max_iter = 0;
-  double tol = 0, dual_tol = 0, step = 0;
-  CLI::App app{"solve a consensus problem with a distributed method (run under mpirun)", "snl consensus solve"};
-  app.add_option("problem", cmd.problem, "problem file (snl-consensus)")->required();
-  app.add_option("-o,--output", cmd.output, "result file (snl-consensus-result)")->required();
-  app.add_option("--method", o.method, "newton-tree|newton-path|subgradient|incremental|central")
-      ->capture_default_str();
-  auto* o_dual = app.add_option("--dual", dual, "Newton's dual solver: splitting (default) or exact");
-  auto* o_max = app.add_option("--max-iter", max_iter, "primal iterations (default 100; baselines 1000)");
-  auto* o_dmax = app.add_option("--dual-max-iter", dual_max_iter, "dual iterations per Newton step (default 10000)");
-  auto* o_tol = app.add_option("--tol", tol,
-                               "Newton/central: stop when the decrement <= tol (default 1e-10); baselines: when the "
-                               "running average's max error <= tol (default 0: run --max-iter)");
-  auto* o_dtol = app.add_option("--dual-tol", dual_tol,
-                                "splitting: stop when max|w(t+1)-w(t)| <= dual-tol max|w(t+1)| (default 1e-12)");
-  auto* o_step = app.add_option("--step", step, "baselines: alpha0 of the step alpha0/sqrt(k+1) (default 0.1)");
-  app.add_option("--partition", o.partition, "metis|block")->capture_default_str();
-  app.add_option("--json", cmd.json, "write a JSON summary");
-  app.add_option("--checkpoint", cmd.checkpoint, "write checkpoints to this file (atomically replaced)");
-  app.add_option("--checkpoint-every", cmd.checkpoint_every, "checkpoint every K primal iterations");
-  app.add_option("--restart", cmd.restart, "resume from a checkpoint (any number of ranks)");
-  app.add_option("--progress-seconds", cmd.progress_seconds, "seconds between progress lines")->capture_default_str();
-  app.add_flag("-q,--quiet", cmd.quiet, "no progress output");
-  try {
-    std::vector<std::string> rev(args.rbegin(), args.rend());  // CLI11 takes them reversed
-    app.parse(rev);
-    if (o_dual->count()) o.dual = dual;
-    if (o_max->count()) o.max_iter = max_iter;
-    if (o_dmax->count()) o.dual_max_iter = dual_max_iter;
-    if (o_tol->count()) o.tol = tol;
-    if (o_dtol->count()) o.dual_tol = dual_tol;
-    if (o_step->count()) o.step = step;
-    const std::string bad = o.validate();
-    if (!bad.empty()) throw Error(bad);
-  } catch (const CLI::CallForHelp&) {
-    if (root) std::printf("%s", app.help().c_str());
-    return 0;
-  } catch (const CLI::ParseError& e) {
-    if (root) std::fprintf(stderr, "snl: error: %s (see snl consensus solve --help)\n", e.what());
-    return 2;
-  } catch (const Error& e) {
-    if (root) std::fprintf(stderr, "snl: error: %s\n", e.what());
-    return 2;
-  }
-  try {
-    return run_consensus_solve(cmd, comm);
-  } catch (const Error& e) {
-    if (root) std::fprintf(stderr, "snl: error: %s\n", e.what());
-    return 1;
-  }
 }
 
 }  // namespace snl

@@ -22,11 +22,6 @@ struct ConsensusGenerateCommand {
 /// only on success). Throws snl::Error (identical on every rank) on failure.
 void run_consensus_generate(const ConsensusGenerateCommand& cmd, MPI_Comm comm);
 
-/// `snl consensus generate ARGS...`: parses `args` (the words after
-/// "generate"), runs, and reports errors on rank 0 as one "snl: error: ..." line.
-/// Returns the exit status: 0 success (or --help), 2 bad options, 1 failure.
-int consensus_generate_main(const std::vector<std::string>& args, MPI_Comm comm);
-
 // ---- solve (solver side) ----
 struct ConsensusSolveCommand {
   std::string problem;
@@ -43,8 +38,5 @@ struct ConsensusSolveCommand {
 /// after writing a checkpoint, 4 on a numerical failure). Throws snl::Error
 /// (identical on every rank) on bad input, with no output touched.
 int run_consensus_solve(const ConsensusSolveCommand& cmd, MPI_Comm comm);
-
-/// `snl consensus solve ARGS...`: as consensus_generate_main.
-int consensus_solve_main(const std::vector<std::string>& args, MPI_Comm comm);
 
 }  // namespace snl
