@@ -245,10 +245,11 @@ int run_command(Commands& c, MPI_Comm comm) {
   return 0;
 }
 
-// run_command with every failure turned into one message and an exit status.
-int run_guarded(Commands& c, MPI_Comm comm) {
+// Runs a command with every failure turned into one message and an exit status.
+template <class Body>
+int guarded(MPI_Comm comm, Body&& body) {
   try {
-    return run_command(c, comm);
+    return body();
   } catch (const snl::UsageError& err) {
     // An option the algorithm cannot honour: refused before anything is read or written.
     return fail(comm, err.what(), snl::kExitUsage);
@@ -383,12 +384,12 @@ int consensus_solve_main(const std::vector<std::string>& args, MPI_Comm comm) {
 namespace {
 
 // `snl consensus generate|solve ...` (seed 001): those commands parse their own
-// options; failures become one message and an exit status, as in run_guarded.
+// options; failures become one message and an exit status, as every command.
 int run_consensus(int argc, char** argv, MPI_Comm comm) {
   const bool root = snl::comm_rank(comm) == 0;
   const std::string which = argc >= 3 ? argv[2] : "";
   const std::vector<std::string> rest(argv + std::min(argc, 3), argv + argc);
-  try {
+  return guarded(comm, [&] {
     if (which == "generate") return snl::consensus_generate_main(rest, comm);
     if (which == "solve") return snl::consensus_solve_main(rest, comm);
     const bool help = which.empty() || which == "--help" || which == "-h";
@@ -396,14 +397,7 @@ int run_consensus(int argc, char** argv, MPI_Comm comm) {
       std::fprintf(stderr, "usage: snl consensus generate|solve ... (see snl consensus solve --help)%s\n",
                    help ? "" : ("; unknown '" + which + "'").c_str());
     return which == "--help" || which == "-h" ? 0 : snl::kExitUsage;
-  } catch (const snl::Error& err) {
-    return fail(comm, err.what(), 1);
-  } catch (const std::bad_alloc&) {
-    snl::abort_all(comm, "out of memory");
-  } catch (const std::exception& err) {
-    snl::abort_all(comm, std::string("internal error: ") + err.what());
-  }
-  return 1;  // not reached: abort_all does not return
+  });
 }
 
 }  // namespace
@@ -442,7 +436,7 @@ int main(int argc, char** argv) {
       MPI_Finalize();
       return code == 0 ? 0 : snl::kExitUsage;
     }
-    status = run_guarded(c, comm);
+    status = guarded(comm, [&] { return run_command(c, comm); });
   }
   // After a failed H5Fclose (disk full) HDF5 would crash in its shutdown inside
   // MPI_Finalize (snl::h5_close_failed): then every rank leaves without it, with
