@@ -8,15 +8,32 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_
 # waiting (MPI start-up, Slurm, signals), and waiting MPI ranks yield their core
 # (OMPI_MCA_mpi_yield_when_idle in tests/CMakeLists.txt).
 JOBS=${SNL_CTEST_JOBS:-$((2 * $(nproc)))}
+SANITIZE=$([ "${SNL_SKIP_SANITIZE:-0}" = 1 ] && echo 0 || echo 1)
 
-scripts/setup.sh build
-(cd build && ctest --output-on-failure -j "$JOBS")
+scripts/setup.sh build   # installs what is missing, then builds
 
-if [ "${SNL_SKIP_SANITIZE:-0}" != 1 ]; then
-  echo "== sanitizer build (ASan + UBSan) =="
+# The sanitizer build compiles at low priority while the Release tests run: it
+# takes the cores they leave idle while they wait.
+asan_pid=""
+if [ "$SANITIZE" = 1 ]; then
   # -O1 with line tables (-g1): what the sanitizers' documentation recommends,
   # enough for their stack traces, and it compiles in about two thirds of -O2's time.
-  scripts/setup.sh build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" -DSNL_SANITIZE=ON
+  mkdir -p build-asan
+  setsid nice -n 15 scripts/setup.sh build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" -DSNL_SANITIZE=ON > build-asan/setup.log 2>&1 &
+  asan_pid=$!
+  # A failed Release run ends the script: stop the whole build with it.
+  trap '[ -z "$asan_pid" ] || kill -- -"$asan_pid" 2> /dev/null || true' EXIT
+fi
+
+echo "== Release tests =="
+(cd build && ctest --output-on-failure -j "$JOBS")
+
+if [ "$SANITIZE" = 1 ]; then
+  echo "== sanitizer build (ASan + UBSan) =="
+  wait "$asan_pid" || { tail -n 50 build-asan/setup.log; echo "sanitizer build failed"; exit 1; }
+  asan_pid=""
+  tail -n 1 build-asan/setup.log
   # Open MPI's own allocations are reported as leaks; memory errors and UB are what we check.
   export ASAN_OPTIONS=detect_leaks=0:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
   # Under the sanitizers run every unit test, the MPI tests on 1 and 2 ranks
