@@ -452,4 +452,114 @@ std::vector<double> model_mm(const Network& net, const Model& m, const std::vect
   return x;
 }
 
+namespace {
+// Each sensor's measurements as (sensor j, or -1 - k for anchor k; range; weight).
+struct Term {
+  GlobalId other;
+  double rho, w;
+};
+std::vector<std::vector<Term>> node_terms(const Network& net, const Model& m) {
+  std::vector<std::vector<Term>> t(net.num_sensors);
+  for (std::size_t e = 0; e < net.sensor_ranges.size(); ++e) {
+    const GlobalId i = net.sensor_edges[2 * e], j = net.sensor_edges[2 * e + 1];
+    t[i].push_back({j, net.sensor_ranges[e], m.sensor_w[e]});
+    t[j].push_back({i, net.sensor_ranges[e], m.sensor_w[e]});
+  }
+  for (std::size_t e = 0; e < net.anchor_ranges.size(); ++e)
+    t[net.anchor_edges[2 * e]].push_back({-1 - net.anchor_edges[2 * e + 1], net.anchor_ranges[e], m.anchor_w[e]});
+  return t;
+}
+const double* other_row(const Network& net, const std::vector<double>& x, GlobalId other) {
+  return other >= 0 ? &x[other * net.dim] : &net.anchors[(-1 - other) * net.dim];
+}
+// Node i's weighted / Huber relaxed cost at v and its gradient g.
+double model_local_f(const Network& net, const Model& m, const std::vector<Term>& terms, const std::vector<double>& x,
+                     const double* v, double* g) {
+  const int p = net.dim;
+  double f = 0;
+  for (int k = 0; k < p; ++k) g[k] = 0;
+  for (const Term& t : terms) {
+    const double* c = other_row(net, x, t.other);
+    const double d = dist(v, c, p);
+    if (d <= t.rho) continue;
+    f += t.w * huber(m.delta, d - t.rho);
+    const double a = t.w * omega(m.delta, d - t.rho) * (1 - t.rho / d);
+    for (int k = 0; k < p; ++k) g[k] += a * (v[k] - c[k]);
+  }
+  return f;
+}
+}  // namespace
+
+std::vector<double> model_pm(const Network& net, const Model& m, const std::vector<double>& x0, int sweeps) {
+  const int p = net.dim;
+  const auto terms = node_terms(net, m);
+  const auto col = coloring(net);
+  std::vector<GlobalId> order(net.num_sensors);
+  for (GlobalId v = 0; v < net.num_sensors; ++v) order[v] = v;
+  std::stable_sort(order.begin(), order.end(), [&](GlobalId a, GlobalId b) { return col[a] < col[b]; });
+  std::vector<double> x = x0;
+  for (int s = 0; s < sweeps; ++s)
+    for (GlobalId i : order) {
+      if (terms[i].empty()) continue;
+      double acc[3] = {0, 0, 0}, wsum = 0;
+      const double* xi = &x[i * p];
+      for (const Term& t : terms[i]) {
+        const double* c = other_row(net, x, t.other);
+        const double d = dist(xi, c, p);
+        const double f = d > t.rho ? t.rho / d : 1.0;
+        const double a = t.w * omega(m.delta, d > t.rho ? d - t.rho : 0.0);
+        for (int k = 0; k < p; ++k) acc[k] += a * (c[k] + f * (xi[k] - c[k]));
+        wsum += a;
+      }
+      for (int k = 0; k < p; ++k) x[i * p + k] = acc[k] / wsum;
+    }
+  return x;
+}
+
+std::vector<double> model_async(const Network& net, const Model& m, const std::vector<double>& x0, long activations,
+                                std::uint64_t seed, bool exact) {
+  const int p = net.dim;
+  const auto terms = node_terms(net, m);
+  std::vector<double> Li(net.num_sensors, 0.0);
+  double ws = 0, wa = 0;
+  for (GlobalId i = 0; i < net.num_sensors; ++i) {
+    double s = 0, a = 0;
+    for (const Term& t : terms[i]) (t.other >= 0 ? s : a) += t.w;
+    Li[i] = s + a;
+    ws = std::max(ws, s);
+    wa = std::max(wa, a);
+  }
+  const double L = 2 * ws + wa;
+  std::vector<double> x = x0;
+  for (long k = 0; k < activations; ++k) {
+    GlobalId i = static_cast<GlobalId>(uniform01(seed, RngStream::kAsyncClock, k) * double(net.num_sensors));
+    i = std::min<GlobalId>(i, net.num_sensors - 1);
+    double g[3];
+    if (!exact) {
+      model_local_f(net, m, terms[i], x, &x[i * p], g);
+      for (int c = 0; c < p; ++c) x[i * p + c] -= g[c] / L;
+      continue;
+    }
+    if (Li[i] == 0) continue;
+    double z[3], zm[3], w[3];
+    for (int c = 0; c < p; ++c) z[c] = zm[c] = x[i * p + c];
+    const double f0 = model_local_f(net, m, terms[i], x, &x[i * p], g);
+    for (int l = 1; l <= 500; ++l) {
+      double step = 0, nz = 0;
+      for (int c = 0; c < p; ++c) w[c] = z[c] + (double(l) - 2) / (double(l) + 1) * (z[c] - zm[c]);
+      model_local_f(net, m, terms[i], x, w, g);
+      for (int c = 0; c < p; ++c) {
+        zm[c] = z[c];
+        z[c] = w[c] - g[c] / Li[i];
+        step += (z[c] - zm[c]) * (z[c] - zm[c]);
+        nz += z[c] * z[c];
+      }
+      if (step <= 1e-24 * (1 + nz)) break;
+    }
+    if (model_local_f(net, m, terms[i], x, z, g) <= f0)
+      for (int c = 0; c < p; ++c) x[i * p + c] = z[c];
+  }
+  return x;
+}
+
 }  // namespace snl::reference

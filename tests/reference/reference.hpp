@@ -55,5 +55,13 @@ std::vector<double> model_nesterov(const Network& net, const Model& m, const std
 /// Phi = sum w rho(|x_i - x_j - y|) + anchors after each iteration into *phi.
 std::vector<double> model_mm(const Network& net, const Model& m, const std::vector<double>& x0, int iters,
                              std::vector<double>* phi = nullptr);
+/// The projection method with x_i <- sum_e a_e P_e(x_i) / sum_e a_e,
+/// a_e = w_e omega(dist(x_i, disk e)), in pm's (colour, id) order.
+std::vector<double> model_pm(const Network& net, const Model& m, const std::vector<double>& x0, int sweeps);
+/// 003 Algorithm 2 on the weighted / Huber local costs: eq. (20) steps 1/L with
+/// L = 2 max_i sum_j w_ij + max_i sum_k w_ik, or (exact) Algorithm 3 with
+/// L_i = sum_j w_ij + sum_k w_ik.
+std::vector<double> model_async(const Network& net, const Model& m, const std::vector<double>& x0, long activations,
+                                std::uint64_t seed, bool exact);
 
 }  // namespace snl::reference
