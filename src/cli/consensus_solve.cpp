@@ -10,7 +10,7 @@
 #include "snl/cli/consensus.hpp"
 #include "snl/core/mpi_util.hpp"
 #include "snl/io/h5file.hpp"
-#include "snl/solvers/checkpoint.hpp"
+#include "snl/core/stop_signal.hpp"
 
 namespace snl {
 

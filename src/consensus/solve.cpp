@@ -10,7 +10,7 @@
 #include "consensus/solver_detail.hpp"
 #include "snl/core/mpi_util.hpp"
 #include "snl/io/network.hpp"
-#include "snl/solvers/checkpoint.hpp"
+#include "snl/core/stop_signal.hpp"
 
 namespace snl::consensus {
 

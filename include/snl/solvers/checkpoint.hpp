@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "snl/core/stop_signal.hpp"
 #include "snl/io/h5file.hpp"
 #include "snl/problem/problem.hpp"
 #include "snl/solvers/history.hpp"
@@ -107,12 +108,5 @@ std::vector<IterationSummary> read_checkpoint_history(const H5File& f);
 /// Order-independent 64-bit fingerprint of a network slab's content
 /// (collective: identical for any number of ranks), as 16 hex digits.
 std::string network_fingerprint(const Network& slab, MPI_Comm comm);
-
-/// Signals that ask a run to checkpoint and stop (SIGTERM, SIGUSR1).
-void install_stop_signal_handlers();
-/// True once such a signal arrived on this process.
-bool stop_signal_received();
-/// Exit status of a run stopped by a signal after writing its checkpoint.
-constexpr int kExitCheckpointed = 3;
 
 }  // namespace snl
