@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <algorithm>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -45,7 +46,16 @@ void add_generate(CLI::App& app, Commands& c) {
   CLI::App* g = c.generate = app.add_subcommand("generate", "generate a random geometric network (HDF5)");
   g->add_option("-o,--output", c.gen.output, "output network file")->required();
   g->add_option("--sensors", c.gen.options.sensors, "number of sensors n")->required();
-  g->add_option("--dim", c.gen.options.dim, "dimension p (2 or 3)")->capture_default_str();
+  g->add_option("--dim", c.gen.options.dim, "dimension p (1, 2 or 3)")->capture_default_str();
+  g->add_option("--topology", c.gen.options.topology, "random|star (star: 003 Fig. 2, --dim 1 --sensors 1)")
+      ->transform(CLI::CheckedTransformer(std::map<std::string, snl::GenerateOptions::Topology>{
+          {"random", snl::GenerateOptions::Topology::kRandom}, {"star", snl::GenerateOptions::Topology::kStar}}))
+      ->capture_default_str();
+  g->add_option("--star-center", c.gen.options.star_center, "star: the hub sensor's true position")
+      ->capture_default_str();
+  g->add_option("--star-anchors", c.gen.options.star_anchors, "star: anchor positions, comma separated")
+      ->delimiter(',')
+      ->capture_default_str();
   g->add_option("--avg-degree", c.gen.options.avg_degree,
                 "average sensor-sensor degree (default: 16 in 2D, 24 in 3D, docs/generator.md)");
   CLI::Option* sigma =
