@@ -152,6 +152,11 @@ void add_eval(CLI::App& app, Commands& c) {
   e->add_option("--weights", c.eval.weights, "file|multiplicative:NF|none: weights of the ML cost (as snl solve)")
       ->capture_default_str();
   e->add_option("--loss", c.eval.loss, "l2|huber:DELTA: loss of the ML cost (as snl solve)")->capture_default_str();
+  e->add_flag("--global-opt", c.eval.global_opt,
+              "dim 1: the exact global ML optimum f* by enumeration, and f* - f_hat(RESULT) (003 Table I)");
+  e->add_option("--global-opt-max-terms", c.eval.global_opt_max_terms,
+                "--global-opt: refuse networks with more measurements (2^T sign patterns)")
+      ->capture_default_str();
   e->add_option("--json", c.eval.json, "write a JSON summary");
 }
 
