@@ -190,7 +190,7 @@ void add_import(CLI::App& app, Commands& c) {
       "import", "network file from text tables (CSV or whitespace-separated; docs/formats.md, Text files)");
   m->add_option("--sensor-edges", c.import.sensor_edges, "rows i,j,range[,sigma]")->required();
   m->add_option("--anchor-edges", c.import.anchor_edges, "rows i,anchor,range[,sigma]")->required();
-  m->add_option("--anchors", c.import.anchors, "one anchor position per row (p = 2 or 3 columns)")->required();
+  m->add_option("--anchors", c.import.anchors, "one anchor position per row (p = 1, 2 or 3 columns)")->required();
   m->add_option("--truth", c.import.truth, "one true position per sensor (optional)");
   m->add_option("-o,--output", c.import.output, "output network file")->required();
   m->add_option("--sensors", c.import.sensors, "number of sensors n (default: truth rows, else largest id + 1)");

@@ -4,6 +4,7 @@
 #    eval --global-opt: the true gap f* - f_hat is at most the eq. (22)
 #    certificate, f* <= f(x_hat), and the eq. (23) bound is 1/2 sum r^2;
 #  - a random 1-D network: eval --crlb gives a finite bound, 1 and 2 ranks agree;
+#  - import of one-column anchors, export of one coordinate;
 #  - bad input: --global-opt on a 2-D network, --topology star without --dim 1,
 #    a dim-1 file with 2-column anchors: one clear error, non-zero exit, nothing written.
 source "$(dirname "$0")/common.bash"
@@ -35,6 +36,13 @@ done
 "$SNL" eval "$T/line.h5" "$T/line1.h5" --crlb --no-covariance --json "$T/c.json" > /dev/null
 "$PY" -c 'import json,sys; d=json.load(open(sys.argv[1])); assert d["crlb_defined"] and 0 < d["crlb_rmse"] < 1, d' "$T/c.json" ||
   fail "1-D CRLB not defined"
+
+# snl import of one-column anchors, and export of one coordinate.
+printf "0\n10\n" > "$T/a.csv"; printf "0,1,2.1\n1,2,3.9\n" > "$T/se.csv"; printf "0,0,2.0\n2,1,4.1\n" > "$T/ae.csv"
+"$SNL" import --sensor-edges "$T/se.csv" --anchor-edges "$T/ae.csv" --anchors "$T/a.csv" -o "$T/imp.h5" | grep -q "p=1" ||
+  fail "import of one-column anchors"
+"$SNL" solve "$T/imp.h5" --algorithm relaxation -o "$T/imp_res.h5" -q
+"$SNL" export "$T/imp_res.h5" -o "$T/imp.csv" && [ "$(head -1 "$T/imp.csv")" = "sensor,x" ] || fail "1-D export header"
 
 expect_error() {  # expect_error FRAGMENT FILE-THAT-MUST-NOT-EXIST CMD...
   local frag=$1 out=$2; shift 2
