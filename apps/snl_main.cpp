@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <algorithm>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -45,7 +46,16 @@ void add_generate(CLI::App& app, Commands& c) {
   CLI::App* g = c.generate = app.add_subcommand("generate", "generate a random geometric network (HDF5)");
   g->add_option("-o,--output", c.gen.output, "output network file")->required();
   g->add_option("--sensors", c.gen.options.sensors, "number of sensors n")->required();
-  g->add_option("--dim", c.gen.options.dim, "dimension p (2 or 3)")->capture_default_str();
+  g->add_option("--dim", c.gen.options.dim, "dimension p (1, 2 or 3)")->capture_default_str();
+  g->add_option("--topology", c.gen.options.topology, "random|star (star: 003 Fig. 2, --dim 1 --sensors 1)")
+      ->transform(CLI::CheckedTransformer(std::map<std::string, snl::GenerateOptions::Topology>{
+          {"random", snl::GenerateOptions::Topology::kRandom}, {"star", snl::GenerateOptions::Topology::kStar}}))
+      ->capture_default_str();
+  g->add_option("--star-center", c.gen.options.star_center, "star: the hub sensor's true position")
+      ->capture_default_str();
+  g->add_option("--star-anchors", c.gen.options.star_anchors, "star: anchor positions, comma separated")
+      ->delimiter(',')
+      ->capture_default_str();
   g->add_option("--avg-degree", c.gen.options.avg_degree,
                 "average sensor-sensor degree (default: 16 in 2D, 24 in 3D, docs/generator.md)");
   CLI::Option* sigma =
@@ -142,6 +152,11 @@ void add_eval(CLI::App& app, Commands& c) {
   e->add_option("--weights", c.eval.weights, "file|multiplicative:NF|none: weights of the ML cost (as snl solve)")
       ->capture_default_str();
   e->add_option("--loss", c.eval.loss, "l2|huber:DELTA: loss of the ML cost (as snl solve)")->capture_default_str();
+  e->add_flag("--global-opt", c.eval.global_opt,
+              "dim 1: the exact global ML optimum f* by enumeration, and f* - f_hat(RESULT) (003 Table I)");
+  e->add_option("--global-opt-max-terms", c.eval.global_opt_max_terms,
+                "--global-opt: refuse networks with more measurements (2^T sign patterns)")
+      ->capture_default_str();
   e->add_option("--json", c.eval.json, "write a JSON summary");
 }
 
@@ -175,7 +190,7 @@ void add_import(CLI::App& app, Commands& c) {
       "import", "network file from text tables (CSV or whitespace-separated; docs/formats.md, Text files)");
   m->add_option("--sensor-edges", c.import.sensor_edges, "rows i,j,range[,sigma]")->required();
   m->add_option("--anchor-edges", c.import.anchor_edges, "rows i,anchor,range[,sigma]")->required();
-  m->add_option("--anchors", c.import.anchors, "one anchor position per row (p = 2 or 3 columns)")->required();
+  m->add_option("--anchors", c.import.anchors, "one anchor position per row (p = 1, 2 or 3 columns)")->required();
   m->add_option("--truth", c.import.truth, "one true position per sensor (optional)");
   m->add_option("-o,--output", c.import.output, "output network file")->required();
   m->add_option("--sensors", c.import.sensors, "number of sensors n (default: truth rows, else largest id + 1)");

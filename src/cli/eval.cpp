@@ -8,6 +8,7 @@
 #include "snl/io/network.hpp"
 #include "snl/io/result_io.hpp"
 #include "snl/problem/analysis.hpp"
+#include "snl/problem/global_1d.hpp"
 
 namespace snl {
 
@@ -23,6 +24,8 @@ struct Evaluation {
   CrlbResult crlb;
   std::string crlb_at;            ///< "truth" or "estimate"
   bool covariance_written = false;
+  bool has_global = false;        ///< --global-opt ran
+  GlobalOptimum1D global;
 };
 
 // The costs and errors of the result's positions on the network (block partition).
@@ -77,6 +80,29 @@ void evaluate_crlb(const EvalCommand& cmd, const Network& whole, const std::vect
     }
   }
   agree(comm, crlb_err);
+}
+
+// --global-opt: the exact f* on rank 0 from the whole network (global_1d.hpp);
+// its refusal (dim, size, an unanchored component) is every rank's error.
+void evaluate_global(const EvalCommand& cmd, const Network& whole, MPI_Comm comm, Evaluation& ev) {
+  if (!cmd.global_opt) return;
+  std::string err;
+  const bool weighted = cmd.weights != "none" && (cmd.weights != "auto" || !whole.sensor_sigmas.empty() ||
+                                                   !whole.anchor_sigmas.empty());
+  if (is_root(comm) && (weighted || cmd.loss != "l2")) {
+    err = "--global-opt: the exact optimum is of the unweighted l2 ML cost (003 eq. 2); this evaluation has "
+          "--weights/--loss or per-measurement sigmas (give --weights none --loss l2)";
+  } else if (is_root(comm)) {
+    try {
+      GlobalOptimum1DOptions o;
+      o.max_terms = cmd.global_opt_max_terms;
+      ev.global = global_ml_optimum_1d(whole, o);
+    } catch (const std::exception& e) {
+      err = "--global-opt: " + std::string(e.what());
+    }
+  }
+  agree(comm, err);
+  ev.has_global = true;
 }
 
 // --crlb without --no-covariance: the per-sensor covariances into the result
@@ -153,6 +179,10 @@ void print_evaluation(const EvalCommand& cmd, const Evaluation& ev) {
   std::printf("  ML cost f = %.10g\n  relaxed cost f_hat = %.10g\n  sum of nonconvex terms of edges inside their disks = %.6g (the 003 eq. 22 certificate when RESULT minimizes f_hat)\n"
               "  a-priori bound (003 eq. 23) = %.6g\n",
               c.ml, c.relaxed, c.certificate, c.apriori);
+  if (ev.has_global)
+    std::printf("  exact global ML optimum f* = %.10g (%llu sign patterns); f* - f_hat(RESULT) = %.6g (the true gap "
+                "f* - f_hat* of 003 Table I when RESULT minimizes f_hat)\n",
+                ev.global.cost, static_cast<unsigned long long>(ev.global.patterns), ev.global.cost - c.relaxed);
   print_errors(ev);
   if (cmd.crlb) print_crlb(ev);
 }
@@ -163,6 +193,10 @@ std::string json_evaluation(const EvalCommand& cmd, const Evaluation& ev) {
   JsonObject j;
   j.add("network", cmd.network).add("result", cmd.result).add("ml_cost", c.ml).add("relaxed_cost", c.relaxed);
   j.add("gap_certificate", c.certificate).add("apriori_bound", c.apriori);
+  if (ev.has_global)
+    j.add("global_ml_optimum", ev.global.cost)
+        .add("true_gap", ev.global.cost - c.relaxed)
+        .add("global_patterns", static_cast<std::int64_t>(ev.global.patterns));
   if (em.valid) {
     j.add("rmse", em.rmse).add("mpe", em.mpe);
     if (em.localizable > 0) {
@@ -195,7 +229,7 @@ void run_eval(const EvalCommand& cmd, MPI_Comm comm) {
   ev.crlb_at = fim_point(cmd, slab);
   Network whole;
   std::vector<double> estimate;
-  if (cmd.crlb) {
+  if (cmd.crlb || cmd.global_opt) {
     collective_try(comm, [&] {
       if (is_root(comm)) {
         whole = read_network_serial(cmd.network);
@@ -206,6 +240,7 @@ void run_eval(const EvalCommand& cmd, MPI_Comm comm) {
       }
     });
   }
+  evaluate_global(cmd, whole, comm, ev);
   evaluate_result(cmd, slab, comm, ev);
   evaluate_crlb(cmd, whole, estimate, comm, ev);
   store_covariance(cmd, whole, comm, ev);

@@ -47,7 +47,7 @@ NetworkHeader read_header(const H5File& f) {
   NetworkHeader h;
   if (!f.has_attr("dim")) throw Error(path + ": root attribute 'dim' is missing");
   const std::int64_t dim = f.attr_int("dim");
-  if (dim != 2 && dim != 3) throw Error(path + ": attribute 'dim' must be 2 or 3, got " + std::to_string(dim));
+  if (dim < 1 || dim > 3) throw Error(path + ": attribute 'dim' must be 1, 2 or 3, got " + std::to_string(dim));
   h.dim = static_cast<int>(dim);
   if (!f.has_attr("num_sensors")) throw Error(path + ": root attribute 'num_sensors' is missing");
   h.num_sensors = f.attr_int("num_sensors");

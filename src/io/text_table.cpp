@@ -186,7 +186,7 @@ EdgeTable parse_edges(std::string_view text, const std::string& name, EdgeKind k
 }
 
 PointTable parse_points(std::string_view text, const std::string& name) {
-  ColumnRule rule{name, 2, 3, "2 or 3 coordinates (the dimension p)",
+  ColumnRule rule{name, 1, 3, "1, 2 or 3 coordinates (the dimension p)",
                   "every row must have the same number of coordinates (the dimension p)"};
   PointTable t;
   static const char* const kAxis[] = {"x", "y", "z"};

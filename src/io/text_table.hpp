@@ -40,7 +40,7 @@ struct EdgeTable {
 /// (the network file's rule), no self-loop for sensor pairs.
 EdgeTable parse_edges(std::string_view text, const std::string& name, EdgeKind kind, int index_base);
 
-/// Rows of p = 2 or 3 finite coordinates (anchors, truth), p the same on every row.
+/// Rows of p = 1, 2 or 3 finite coordinates (anchors, truth), p the same on every row.
 struct PointTable {
   int dim = 0;                      ///< columns; 0 when the file has no rows
   std::vector<double> coords;       ///< [rows * dim]

@@ -94,7 +94,7 @@ NetworkIssue check_flags01(Order o, const char* name, const std::vector<std::uin
 NetworkIssue check_network(const Network& net, bool whole) {
   const int p = net.dim;
   const GlobalId n = net.num_sensors;
-  if (p != 2 && p != 3) return {0, "dim must be 2 or 3, got " + s(p)};
+  if (p < 1 || p > 3) return {0, "dim must be 1, 2 or 3, got " + s(p)};
   if (n < 1) return {0, "num_sensors must be >= 1, got " + s(n)};
 
   // anchors

@@ -3,6 +3,7 @@
 // which send full chunks to the SIMD table and the rest to the scalar twins.
 #include <cstdlib>
 #include <cstring>
+#include <type_traits>
 
 #include "kernels/simd_common.hpp"
 
@@ -52,6 +53,13 @@ template <auto Fn, class Step>
 void run_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
                 const Step& s) {
   if (c0 >= c1) return;
+  if (prob.dim() == 1) {  // p = 1: the scalar twin only (simd_common.hpp)
+    if constexpr (std::is_same_v<Step, RelaxStep>)
+      kScalarRelax1(prob, nl, c0, c1, s);
+    else
+      kScalarMM1(prob, nl, c0, c1, s);
+    return;
+  }
   const std::int64_t full = nl.count[c1 - 1] == nl.lanes ? c1 : c1 - 1;
   const int d = prob.dim() == 2 ? 0 : 1;  // p = 2, else p = 3
   if (const KernelTable* simd = simd_table(nl.lanes)) {

@@ -92,6 +92,8 @@ void mm_chunks_scalar(const LocalizationProblem& prob, const NodeLanes& nl, std:
 
 const KernelTable kScalarKernels = {{relax_chunks_scalar<2>, relax_chunks_scalar<3>},
                                     {mm_chunks_scalar<2>, mm_chunks_scalar<3>}};
+const RelaxChunksFn kScalarRelax1 = relax_chunks_scalar<1>;
+const MMChunksFn kScalarMM1 = mm_chunks_scalar<1>;
 
 void add_anchor_disk_terms(const LocalizationProblem& prob, LocalId v, const double* xv, double* acc) {
   const int p = prob.dim();
@@ -104,8 +106,10 @@ void add_anchor_disk_terms(const LocalizationProblem& prob, LocalId v, const dou
     const double* a = anc + std::size_t(aid[e]) * p;
     if (p == 2)
       disk_term<2>(xv, a, ar[e], t);
-    else
+    else if (p == 3)
       disk_term<3>(xv, a, ar[e], t);
+    else
+      disk_term<1>(xv, a, ar[e], t);
     for (int c = 0; c < p; ++c) acc[c] += t[c];
   }
 }

@@ -30,6 +30,10 @@ struct KernelTable {
 };
 
 extern const KernelTable kScalarKernels;  // scalar.cpp
+/// p = 1 (the 003 Fig. 2 networks): scalar only, no SIMD table (a 1-D run is
+/// small; the lane layout is the same, so ranks still agree bit for bit).
+extern const RelaxChunksFn kScalarRelax1;  // scalar.cpp
+extern const MMChunksFn kScalarMM1;        // scalar.cpp
 
 #ifdef SNL_HAVE_AVX2_PATH
 extern const KernelTable kAvx2Kernels;    // avx2.cpp, 4 lanes

@@ -22,8 +22,8 @@ std::string GenerateOptions::validate() const {
     os << "--sensors must be at least 1 (got " << sensors << ")";
   } else if (sensors > std::numeric_limits<std::int32_t>::max()) {
     os << "--sensors must be at most " << std::numeric_limits<std::int32_t>::max() << " (got " << sensors << ")";
-  } else if (dim != 2 && dim != 3) {
-    os << "--dim must be 2 or 3 (got " << dim << ")";
+  } else if (dim < 1 || dim > 3) {
+    os << "--dim must be 1, 2 or 3 (got " << dim << ")";
   } else if (avg_degree == kAutoDegree) {
     // resolved by default_avg_degree(dim)
   } else if (!std::isfinite(avg_degree) || avg_degree < 0) {
@@ -44,6 +44,28 @@ std::string GenerateOptions::validate() const {
   } else if (max_draws < 1) {
     os << "--max-draws must be at least 1 (got " << max_draws << ")";
   }
+  // Checked apart from the chain above, which ends early at the default degree.
+  if (os.str().empty() && topology == Topology::kStar) return validate_star();
+  return os.str();
+}
+
+std::string GenerateOptions::validate_star() const {
+  std::ostringstream os;
+  if (dim != 1) {
+    os << "--topology star is the one-dimensional network of 003 Fig. 2: give --dim 1 (got " << dim << ")";
+  } else if (sensors != 1) {
+    os << "--topology star has one sensor (the hub; its neighbours are the anchors): give --sensors 1 (got "
+       << sensors << ")";
+  } else if (!std::isfinite(sigma) || sigma < 0) {
+    os << "--sigma must be a finite number >= 0 (got " << sigma << ")";
+  } else if (sigma_rel != 0) {
+    os << "--sigma-rel does not apply to --topology star (no link radius): give --sigma";
+  } else if (star_anchors.empty()) {
+    os << "--star-anchors needs at least one anchor position";
+  } else if (!std::isfinite(star_center) ||
+             std::any_of(star_anchors.begin(), star_anchors.end(), [](double a) { return !std::isfinite(a); })) {
+    os << "--star-center and --star-anchors must be finite";
+  }
   return os.str();
 }
 
@@ -63,6 +85,7 @@ constexpr double kPi = 3.14159265358979323846;
 // r <= 1: the integral over the ball of prod_d (1 - |z_d|). It accounts for the
 // boundary, so the degree estimate is close even for small n.
 double mean_ball_fraction(int p, double r) {
+  if (p == 1) return 2.0 * r - r * r;  // |[x - r, x + r] & [0, 1]| averaged over x
   if (p == 2) return kPi * r * r - 8.0 / 3.0 * r * r * r + 0.5 * r * r * r * r;
   const double r3 = r * r * r;
   return 4.0 / 3.0 * kPi * r3 - 1.5 * kPi * r3 * r + 1.6 * r3 * r * r - r3 * r3 / 6.0;
@@ -154,13 +177,14 @@ struct Grid {
   void visit_pairs(double lim2, F&& f) const {
     std::vector<std::array<int, 3>> offs;
     const int lo3 = P == 3 ? -1 : 0, hi3 = P == 3 ? 1 : 0;
+    const int lo2 = P >= 2 ? -1 : 0, hi2 = P >= 2 ? 1 : 0;
     for (int dz = lo3; dz <= hi3; ++dz)
-      for (int dy = -1; dy <= 1; ++dy)
+      for (int dy = lo2; dy <= hi2; ++dy)
         for (int dx = -1; dx <= 1; ++dx)
           if (dz > 0 || (dz == 0 && (dy > 0 || (dy == 0 && dx > 0)))) offs.push_back({dx, dy, dz});
-    const int gz = P == 3 ? g : 1;
+    const int gz = P == 3 ? g : 1, gy = P >= 2 ? g : 1;
     for (int cz = 0; cz < gz; ++cz)
-      for (int cy = 0; cy < g; ++cy)
+      for (int cy = 0; cy < gy; ++cy)
         for (int cx = 0; cx < g; ++cx) {
           const std::size_t c = (static_cast<std::size_t>(cz) * g + cy) * g + cx;
           const std::uint32_t s0 = start[c], e0 = start[c + 1];
@@ -172,7 +196,7 @@ struct Grid {
             }
           for (const auto& o : offs) {
             const int nx = cx + o[0], ny = cy + o[1], nz = cz + o[2];
-            if (nx < 0 || nx >= g || ny < 0 || ny >= g || nz < 0 || nz >= gz) continue;
+            if (nx < 0 || nx >= g || ny < 0 || ny >= gy || nz < 0 || nz >= gz) continue;
             const std::size_t nc = (static_cast<std::size_t>(nz) * g + ny) * g + nx;
             const std::uint32_t s1 = start[nc], e1 = start[nc + 1];
             for (std::uint32_t a = s0; a < e0; ++a) {
@@ -428,6 +452,36 @@ std::string localizability_warning(const GenerateOptions& opt, const GenerateRep
   return os.str();
 }
 
+// 003 Fig. 2 / Table I: one sensor (the hub) at star_center on the line, every
+// anchor its neighbour, ranges with the noise of eq. (28) under the same
+// counters as the random networks (kAnchorNoise, i m + k with i = 0).
+Network star_network(const GenerateOptions& opt, GenerateReport& rep) {
+  Network net;
+  net.dim = 1;
+  net.num_sensors = 1;
+  net.has_truth = true;
+  net.truth = {opt.star_center};
+  net.anchors = opt.star_anchors;
+  net.sigma = opt.sigma;
+  double reach = 0;
+  for (std::size_t k = 0; k < net.anchors.size(); ++k) {
+    const double d = std::abs(opt.star_center - net.anchors[k]);
+    reach = std::max(reach, d);
+    net.anchor_edges.push_back(0);
+    net.anchor_edges.push_back(static_cast<GlobalId>(k));
+    net.anchor_ranges.push_back(opt.sigma > 0 ? std::abs(d + opt.sigma * standard_normal(opt.seed, RngStream::kAnchorNoise, k))
+                                              : d);
+  }
+  net.total_sensor_edges = 0;
+  net.total_anchor_edges = net.local_anchor_edges();
+  rep.anchor_radius = reach;
+  rep.sigma = opt.sigma;
+  rep.draw_seed = opt.seed;
+  rep.localizability = analyze_localizability(net, true);
+  net.localizability = rep.localizability.flags;
+  return net;
+}
+
 Network generate_impl(const GenerateOptions& options, GenerateReport* report, bool brute) {
   std::string msg = options.validate();
   GenerateOptions opt = options;
@@ -436,6 +490,12 @@ Network generate_impl(const GenerateOptions& options, GenerateReport* report, bo
     opt.avg_degree = std::min(default_avg_degree(opt.dim), static_cast<double>(std::max<GlobalId>(opt.sensors - 1, 0)));
   }
   if (!msg.empty()) throw Error("generate: " + msg);
+  if (opt.topology == GenerateOptions::Topology::kStar) {
+    GenerateReport rep;
+    Network net = star_network(opt, rep);
+    if (report) *report = rep;
+    return net;
+  }
   using L = GenerateOptions::Localizable;
   const GlobalId n = opt.sensors;
   const bool redraw = opt.localizable == L::kYes || (opt.localizable == L::kAuto && n <= kRigidityLimit);
@@ -447,7 +507,9 @@ Network generate_impl(const GenerateOptions& options, GenerateReport* report, bo
   for (int d = 0; d < limit; ++d) {
     const std::uint64_t seed =
         d == 0 ? opt.seed : random_bits(opt.seed, RngStream::kRedraw, static_cast<std::uint64_t>(d));
-    net = opt.dim == 2 ? draw_network<2>(opt, seed, brute, rep) : draw_network<3>(opt, seed, brute, rep);
+    net = opt.dim == 1   ? draw_network<1>(opt, seed, brute, rep)
+          : opt.dim == 2 ? draw_network<2>(opt, seed, brute, rep)
+                         : draw_network<3>(opt, seed, brute, rep);
     rep.draws = d + 1;
     // Cheap tests first; the rigidity check (n <= kRigidityLimit) only when they pass.
     rep.localizability = analyze_localizability(net, false);

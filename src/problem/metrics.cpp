@@ -170,18 +170,23 @@ CostTerms costs_impl(const LocalizationProblem& prob, const double* x) {
 }  // namespace
 
 CostTerms evaluate_costs(const LocalizationProblem& prob, const double* x) {
+  if (prob.dim() == 1) return costs_impl<1>(prob, x);
   return prob.dim() == 2 ? costs_impl<2>(prob, x) : costs_impl<3>(prob, x);
 }
 
 void relaxed_gradient(const LocalizationProblem& prob, const double* x, double* g, LocalId begin, LocalId end) {
-  if (prob.dim() == 2)
+  if (prob.dim() == 1)
+    gradient_impl<1, true>(prob, x, g, begin, end);
+  else if (prob.dim() == 2)
     gradient_impl<2, true>(prob, x, g, begin, end);
   else
     gradient_impl<3, true>(prob, x, g, begin, end);
 }
 
 void ml_gradient(const LocalizationProblem& prob, const double* x, double* g, LocalId begin, LocalId end) {
-  if (prob.dim() == 2)
+  if (prob.dim() == 1)
+    gradient_impl<1, false>(prob, x, g, begin, end);
+  else if (prob.dim() == 2)
     gradient_impl<2, false>(prob, x, g, begin, end);
   else
     gradient_impl<3, false>(prob, x, g, begin, end);

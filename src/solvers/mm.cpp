@@ -39,7 +39,9 @@ class MM final : public Algorithm {
     lanes_.build(prob_);
     plan_.build(prob_, lanes_, levels_);
     norms_.assign(std::size_t(levels_) * 2 * detail::kMaxLanes, 0.0);
-    if (prob_.dim() == 2)
+    if (prob_.dim() == 1)
+      init<1>();
+    else if (prob_.dim() == 2)
       init<2>();
     else
       init<3>();
@@ -91,6 +93,7 @@ class MM final : public Algorithm {
   }
   double objective() override {
     prob_.graph().halo().exchange(x_.data(), prob_.dim());
+    if (prob_.dim() == 1) return surrogate<1>();
     return prob_.dim() == 2 ? surrogate<2>() : surrogate<3>();
   }
   const double* previous_positions() const override { return xn_.data(); }

@@ -50,7 +50,9 @@ class MMAccel final : public Algorithm {
     x_[kPrev] = x_[kCur];
     lanes_.build(prob_);
     norms_.assign(2 * detail::kMaxLanes, 0.0);
-    if (prob_.dim() == 2)
+    if (prob_.dim() == 1)
+      init<1>();
+    else if (prob_.dim() == 2)
       init<2>();
     else
       init<3>();
@@ -189,7 +191,9 @@ class MMAccel final : public Algorithm {
     return F.value();
   }
   void add_surrogate_terms(int b, std::int64_t c0, std::int64_t c1, detail::ExactSum& F) const {
-    if (prob_.dim() == 2)
+    if (prob_.dim() == 1)
+      add_terms<1>(b, c0, c1, F);
+    else if (prob_.dim() == 2)
       add_terms<2>(b, c0, c1, F);
     else
       add_terms<3>(b, c0, c1, F);

@@ -150,7 +150,9 @@ class ModelMM final : public Algorithm {
     x_ = with_ghost_rows(prob_, x0);
     xn_ = x_;
     prob_.graph().halo().exchange(x_.data(), prob_.dim());
-    if (prob_.dim() == 2)
+    if (prob_.dim() == 1)
+      init<1>();
+    else if (prob_.dim() == 2)
       init<2>();
     else
       init<3>();
@@ -164,7 +166,9 @@ class ModelMM final : public Algorithm {
 
   void iterate() override {
     prob_.graph().halo().exchange(x_.data(), prob_.dim());
-    if (prob_.dim() == 2)
+    if (prob_.dim() == 1)
+      step<1>();
+    else if (prob_.dim() == 2)
       step<2>();
     else
       step<3>();
@@ -174,6 +178,7 @@ class ModelMM final : public Algorithm {
   const std::vector<double>& positions() const override { return x_; }
   double objective() override {
     prob_.graph().halo().exchange(x_.data(), prob_.dim());
+    if (prob_.dim() == 1) return surrogate<1>();
     return prob_.dim() == 2 ? surrogate<2>() : surrogate<3>();
   }
   const double* previous_positions() const override { return xn_.data(); }

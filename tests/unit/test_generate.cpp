@@ -119,16 +119,18 @@ TEST_P(DegreeTest, AchievedWithinOneEdge) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Sizes, DegreeTest,
-                         testing::Combine(testing::Values(50, 1000, 100000), testing::Values(2, 3),
+                         testing::Combine(testing::Values(50, 1000, 100000), testing::Values(1, 2, 3),
                                           testing::Values(4.3, 6.1, 10.0)));
 
 // The spatial hash must find exactly the pairs the O(n^2) search finds.
 TEST(Generate, HashedEqualsBruteForceTwin) {
-  for (int dim : {2, 3})
+  for (int dim : {1, 2, 3})
     for (int n : {2, 10, 57, 400, 2500})
       for (double deg : {0.0, 1.0, 4.3, 10.0, 0.8 * (n - 1), double(n - 1)}) {
         if (deg > n - 1 || (deg > 10 && n > 400)) continue;
         auto o = opts(n, dim, deg, 0.02, 11 + n);
+        // 1-D draws at these degrees are seldom localizable: one draw, not 100 redraws.
+        if (dim == 1) o.localizable = GenerateOptions::Localizable::kNo;
         GenerateReport ra, rb;
         const Network a = snl::generate_network(o, &ra);
         const Network b = snl::generate_network_reference(o, &rb);
@@ -140,7 +142,7 @@ TEST(Generate, HashedEqualsBruteForceTwin) {
 
 // Independent brute force: the edge set is exactly {pairs with d <= radius}.
 TEST(Generate, EdgeSetIsAllPairsWithinRadius) {
-  for (int dim : {2, 3}) {
+  for (int dim : {1, 2, 3}) {
     GenerateReport rep;
     const Network net = snl::generate_network(opts(1500, dim, 7.0), &rep);
     const double r2 = rep.radius * rep.radius;
@@ -395,6 +397,44 @@ TEST(Generate, Validation) {
   const Network full = snl::generate_network(opts(10, 3, 9));
   EXPECT_EQ(full.local_sensor_edges(), 45);
   EXPECT_EQ(snl::generate_network(opts(1, 2, 0)).local_sensor_edges(), 0);
+  EXPECT_NE(opts(10, 0, 4.3).validate(), "");
+  EXPECT_EQ(opts(10, 1, 4.3).validate(), "");
+}
+
+// 003 Fig. 2's star: one sensor at star_center, every anchor its neighbour,
+// ranges |d + sigma N| with the anchor-noise counters; refusals.
+TEST(Generate, Star) {
+  snl::GenerateOptions o;
+  o.dim = 1;
+  o.sensors = 1;
+  o.topology = snl::GenerateOptions::Topology::kStar;
+  o.sigma = 0;
+  const Network exact = snl::generate_network(o);
+  EXPECT_EQ(exact.dim, 1);
+  EXPECT_EQ(exact.truth, std::vector<double>{3.0});
+  EXPECT_EQ(exact.anchors, (std::vector<double>{2.0, 4.0, 5.0}));
+  EXPECT_EQ(exact.anchor_edges, (std::vector<snl::GlobalId>{0, 0, 0, 1, 0, 2}));
+  EXPECT_EQ(exact.anchor_ranges, (std::vector<double>{1.0, 1.0, 2.0}));
+  EXPECT_EQ(exact.local_sensor_edges(), 0);
+  o.sigma = 0.25;
+  o.seed = 9;
+  const Network noisy = snl::generate_network(o);
+  for (int k = 0; k < 3; ++k)
+    EXPECT_EQ(noisy.anchor_ranges[k],
+              std::abs(exact.anchor_ranges[k] + 0.25 * snl::standard_normal(9, snl::RngStream::kAnchorNoise, k)));
+  EXPECT_NE(noisy.anchor_ranges, exact.anchor_ranges);
+  auto bad = o;
+  bad.dim = 2;
+  EXPECT_NE(bad.validate().find("give --dim 1"), std::string::npos);
+  bad = o;
+  bad.sensors = 3;
+  EXPECT_NE(bad.validate().find("give --sensors 1"), std::string::npos);
+  bad = o;
+  bad.star_anchors.clear();
+  EXPECT_NE(bad.validate(), "");
+  bad = o;
+  bad.sigma_rel = 0.1;
+  EXPECT_NE(bad.validate(), "");
 }
 
 }  // namespace

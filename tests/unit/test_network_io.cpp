@@ -349,7 +349,7 @@ TEST(NetworkIoBroken, VersionNotAnInteger) {
 TEST(NetworkIoBroken, BadDim) {
   const std::string path = scratch("dim.h5");
   write_raw(path, sample(), {{"dim", [](H5File& f) { f.set_attr("dim", std::int64_t{4}); }}});
-  EXPECT_CONTAINS(read_error(path), "attribute 'dim' must be 2 or 3, got 4");
+  EXPECT_CONTAINS(read_error(path), "attribute 'dim' must be 1, 2 or 3, got 4");
 }
 
 TEST(NetworkIoBroken, AnchorsWrongShape) {

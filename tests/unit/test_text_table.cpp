@@ -105,8 +105,10 @@ TEST(TextTable, PointsHaveOneDimension) {
   const auto err = [](const std::string& text) { return error_of([&] { parse_points(text, "p.csv"); }); };
   EXPECT_EQ(err("0,0\n1,2,3\n"),
             "p.csv:2: 3 columns, but line 1 has 2: every row must have the same number of coordinates (the dimension p)");
-  EXPECT_EQ(err("1,2,3,4\n"), "p.csv:1: 4 columns, expected 2 or 3 coordinates (the dimension p)");
-  EXPECT_EQ(err("0,0\n1\n"), "p.csv:2: 1 columns, expected 2 or 3 coordinates (the dimension p)");
+  EXPECT_EQ(err("1,2,3,4\n"), "p.csv:1: 4 columns, expected 1, 2 or 3 coordinates (the dimension p)");
+  EXPECT_EQ(err("0,0\n1\n"),
+            "p.csv:2: 1 columns, but line 1 has 2: every row must have the same number of coordinates (the dimension p)");
+  EXPECT_EQ(parse_points("3\n-1.5\n", "p.csv").dim, 1);  // p = 1: points on a line
   EXPECT_EQ(err("0,0\n1,inf\n"), "p.csv:2: coordinate y is Inf");
   EXPECT_EQ(err("0,0\n1,z\n"), "p.csv:2: column 2 (y): 'z' is not a number");
 }

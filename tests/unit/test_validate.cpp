@@ -69,9 +69,9 @@ TEST(Validate, Dim) {
   Network n = small();
   n.dim = 4;
   n.anchors = {0, 0, 0, 0};
-  EXPECT_INVALID(n, "dim must be 2 or 3, got 4");
-  n.dim = 1;
-  EXPECT_INVALID(n, "dim must be 2 or 3, got 1");
+  EXPECT_INVALID(n, "dim must be 1, 2 or 3, got 4");
+  n.dim = 0;
+  EXPECT_INVALID(n, "dim must be 1, 2 or 3, got 0");
 }
 
 TEST(Validate, NumSensors) {

@@ -68,6 +68,10 @@ struct EvalCommand {
   std::string fim_at = "auto";
   bool no_covariance = false;  ///< do not add the per-sensor covariances to the result file
   std::string weights = "auto", loss = "l2";  ///< the ML cost's model, as snl solve --weights/--loss
+  /// dim 1: the exact global ML optimum f* (global_1d.hpp) and f* - f_hat(RESULT),
+  /// the true gap of 003 Table I when RESULT minimizes f_hat.
+  bool global_opt = false;
+  int global_opt_max_terms = 26;
 };
 void run_eval(const EvalCommand& cmd, MPI_Comm comm);
 

@@ -5,6 +5,7 @@
 // the noise of seed 003, eq. (28).
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "snl/problem/analysis.hpp"
 #include "snl/io/network.hpp"
@@ -29,7 +30,7 @@ constexpr int kAutoAnchors = -1;
 
 struct GenerateOptions {
   GlobalId sensors = 0;          ///< n (required, >= 1)
-  int dim = 2;                   ///< 2 or 3
+  int dim = 2;                   ///< 1, 2 or 3
   double avg_degree = kAutoDegree;  ///< target average sensor-sensor degree (within +-5%); kAutoDegree: default_avg_degree(dim)
   double sigma = 0.01;           ///< range noise standard deviation (>= 0), in region units
   double sigma_rel = 0.0;        ///< > 0: sigma = sigma_rel * link radius (overrides sigma)
@@ -39,7 +40,17 @@ struct GenerateOptions {
   std::uint64_t seed = 1;
   enum class Localizable { kAuto, kYes, kNo } localizable = Localizable::kAuto;
   int max_draws = 1000;          ///< redraw limit under --localizable
+  /// kStar (dim 1, sensors 1): the star of 003 Fig. 2 / Table I, one sensor at
+  /// star_center whose neighbours are anchors at star_anchors (all measured,
+  /// noise of eq. 28); the random-network options do not apply.
+  enum class Topology { kRandom, kStar } topology = Topology::kRandom;
+  double star_center = 3.0;
+  /// Distances 1, 1 and 2 from the hub: the expected eq. (23) bound, 1/2 sum
+  /// (d_k^2 + sigma^2) = 3.094 at sigma 0.25, matches 003 Table I (3.0871);
+  /// docs/reproduction.md.
+  std::vector<double> star_anchors = {2.0, 4.0, 5.0};
   std::string validate() const;  ///< "" if valid, else the message
+  std::string validate_star() const;
 };
 
 struct GenerateReport {
