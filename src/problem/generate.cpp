@@ -24,11 +24,10 @@ std::string GenerateOptions::validate() const {
     os << "--sensors must be at most " << std::numeric_limits<std::int32_t>::max() << " (got " << sensors << ")";
   } else if (dim < 1 || dim > 3) {
     os << "--dim must be 1, 2 or 3 (got " << dim << ")";
-  } else if (avg_degree == kAutoDegree) {
-    // resolved by default_avg_degree(dim)
-  } else if (!std::isfinite(avg_degree) || avg_degree < 0) {
+  } else if (avg_degree != kAutoDegree && (!std::isfinite(avg_degree) || avg_degree < 0)) {
+    // (kAutoDegree is resolved by default_avg_degree(dim))
     os << "--avg-degree must be a finite number >= 0 (got " << avg_degree << ")";
-  } else if (avg_degree > static_cast<double>(sensors - 1)) {
+  } else if (avg_degree != kAutoDegree && avg_degree > static_cast<double>(sensors - 1)) {
     os << "--avg-degree " << avg_degree << " is impossible with " << sensors << " sensors (at most "
        << sensors - 1 << ")";
   } else if (!std::isfinite(sigma) || sigma < 0) {
@@ -44,7 +43,6 @@ std::string GenerateOptions::validate() const {
   } else if (max_draws < 1) {
     os << "--max-draws must be at least 1 (got " << max_draws << ")";
   }
-  // Checked apart from the chain above, which ends early at the default degree.
   if (os.str().empty() && topology == Topology::kStar) return validate_star();
   return os.str();
 }

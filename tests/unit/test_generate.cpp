@@ -386,7 +386,12 @@ TEST(Generate, Validation) {
   EXPECT_NE(opts(10, 2, 9.5).validate(), "");
   EXPECT_NE(opts(10, 2, NAN).validate(), "");
   EXPECT_NE(opts(10, 2, 4.3, -0.1).validate(), "");
-  auto o = opts(10, 2, 4.3);
+  // Every later rule still applies at the default degree.
+  EXPECT_NE(opts(10, 2, snl::kAutoDegree, -0.1).validate(), "");
+  auto o = opts(10, 2, snl::kAutoDegree);
+  o.side = NAN;
+  EXPECT_NE(o.validate(), "");
+  o = opts(10, 2, 4.3);
   o.num_random_anchors = -2;
   EXPECT_NE(o.validate(), "");
   o = opts(10, 2, 4.3);
