@@ -12,10 +12,11 @@
 # grown at constant density, sigma 0.14 of the link radius, degree 16, anchors
 # auto). Needs a build with -DSNL_BUILD_CERES=ON (BUILD, default ./build).
 # Environment (defaults): NP (1) snl ranks, THREADS (1) Ceres threads,
-#   SNL_TOL (1e-7, gradient rule), SNL_ITER (20000), CERES_ITER (100),
+#   SNL_TOL (1e-7, gradient rule), SNL_ITER (20000), MM_ITER (SNL_ITER; MM's cap), CERES_ITER (100),
 #   CERES_TOL (1e-12: function, gradient and parameter tolerance), CRLB (1: `snl eval --crlb`
 #   on the network once), LOCK (/work/wt/bench.lock; every command runs under flock).
 set -euo pipefail
+{  # the whole script is parsed before it runs: editing it during a run is safe
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
 BUILD=${BUILD:-$ROOT/build}
 SNL=$BUILD/bin/snl
@@ -24,6 +25,7 @@ OUT=$1 WORK=$2
 shift 2
 NP=${NP:-1} THREADS=${THREADS:-1}
 SNL_TOL=${SNL_TOL:-1e-7} SNL_ITER=${SNL_ITER:-20000}
+MM_ITER=${MM_ITER:-$SNL_ITER}
 CERES_ITER=${CERES_ITER:-100} CERES_TOL=${CERES_TOL:-1e-12}
 CRLB=${CRLB:-1}
 LOCK=${LOCK:-/work/wt/bench.lock}
@@ -58,8 +60,10 @@ for n in "$@"; do
   rep=1
   while [ -f "$o/ceres.$rep.json" ]; do rep=$((rep + 1)); done
   for alg in mm mm-accel; do
+    cap=$SNL_ITER
+    [ $alg = mm ] && cap=$MM_ITER
     timed "$o/$alg.$rep.log" "${RUN[@]}" "$SNL" solve "$net" -o "$w/$alg.h5" --algorithm $alg --init "$w/R0.h5" \
-      --tol "$SNL_TOL" --max-iter "$SNL_ITER" --history-every 10 --json "$o/$alg.$rep.json"
+      --tol "$SNL_TOL" --max-iter "$cap" --history-every 10 --json "$o/$alg.$rep.json"
     history_csv "$w/$alg.h5" "$o/$alg.$rep.history.csv"
   done
   timed "$o/ceres.$rep.log" "$CERES" "$net" "$w/R0.h5" -o "$w/ceres.h5" --json "$o/ceres.$rep.json" \
@@ -71,4 +75,8 @@ for n in "$@"; do
     timed "$o/crlb.log" "$SNL" eval "$net" "$w/mm-accel.h5" --crlb --fim-at truth --no-covariance --json "$o/crlb.json"
   fi
 done
+# raw files without machine paths
+for n in "$@"; do sed -i "s#$BUILD#BUILD#g; s#$WORK#WORK#g" "$OUT/n$n"/*.log "$OUT/n$n"/*.json; done
 /usr/bin/python3 "$ROOT/bench/ceres/table.py" "$OUT"
+exit
+}
