@@ -70,6 +70,7 @@ for n in "$@"; do
     --max-iter "$CERES_ITER" --tol "$CERES_TOL" --gradient-tol "$CERES_TOL" --parameter-tol "$CERES_TOL" \
     --threads "$THREADS" -q
   history_csv "$w/ceres.h5" "$o/ceres.$rep.history.csv"
+  /usr/bin/python3 "$ROOT/bench/ceres/errors.py" "$w" > "$o/errors.$rep.txt"
   if [ "$CRLB" = 1 ] && [ ! -f "$o/crlb.json" ]; then
     # the bound on the anchored rigid part, Fisher information at the truth (a property of the network)
     timed "$o/crlb.log" "$SNL" eval "$net" "$w/mm-accel.h5" --crlb --fim-at truth --no-covariance --json "$o/crlb.json"
