@@ -13,6 +13,7 @@
 # auto). Needs a build with -DSNL_BUILD_CERES=ON (BUILD, default ./build).
 # Environment (defaults): NP (1) snl ranks, THREADS (1) Ceres threads,
 #   SNL_TOL (1e-7, gradient rule), SNL_ITER (20000), MM_ITER (SNL_ITER; MM's cap), CERES_ITER (100),
+#   ALGS ("mm mm-accel": the snl refinements to run),
 #   CERES_TOL (1e-12: function, gradient and parameter tolerance), CRLB (1: `snl eval --crlb`
 #   on the network once), LOCK (/work/wt/bench.lock; every command runs under flock).
 set -euo pipefail
@@ -26,6 +27,7 @@ shift 2
 NP=${NP:-1} THREADS=${THREADS:-1}
 SNL_TOL=${SNL_TOL:-1e-7} SNL_ITER=${SNL_ITER:-20000}
 MM_ITER=${MM_ITER:-$SNL_ITER}
+ALGS=${ALGS:-mm mm-accel}
 CERES_ITER=${CERES_ITER:-100} CERES_TOL=${CERES_TOL:-1e-12}
 CRLB=${CRLB:-1}
 LOCK=${LOCK:-/work/wt/bench.lock}
@@ -59,7 +61,7 @@ for n in "$@"; do
     --history-every 100 --json "$o/R0.json"
   rep=1
   while [ -f "$o/ceres.$rep.json" ]; do rep=$((rep + 1)); done
-  for alg in mm mm-accel; do
+  for alg in $ALGS; do
     cap=$SNL_ITER
     [ $alg = mm ] && cap=$MM_ITER
     timed "$o/$alg.$rep.log" "${RUN[@]}" "$SNL" solve "$net" -o "$w/$alg.h5" --algorithm $alg --init "$w/R0.h5" \

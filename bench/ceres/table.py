@@ -66,7 +66,7 @@ def table_for(n, d):
     fmin = min(r["js"]["ml_cost"] for r in runs)
     print("### n = %s\n" % n)
     cpu0, load0 = log_info(os.path.join(d, "R0.log"))
-    print("Common start (relaxation, %s ranks): %d iterations, %s, ML cost %.10g, RMSE (localizable) %.6g, "
+    print("Common start (relaxation, %s rank(s)): %d iterations, %s, ML cost %.10g, RMSE (localizable) %.6g, "
           "solve %.1f s wall%s%s. Lowest final ML cost f_min = %.10g.\n" % (
               r0["ranks"], r0["iterations"], r0["termination"], r0["ml_cost"], r0["rmse_localizable"],
               r0["solve_seconds"], "" if cpu0 is None else ", %.1f s CPU" % cpu0,
@@ -74,8 +74,11 @@ def table_for(n, d):
     crlb = os.path.join(d, "crlb.json")
     if os.path.exists(crlb):
         c = json.load(open(crlb))
-        keys = [k for k in c if "crlb" in k]
-        print("CRLB (`snl eval --crlb --fim-at truth`): " + ", ".join("%s %s" % (k, c[k]) for k in keys) + "\n")
+        if c.get("crlb_defined"):
+            print("CRLB (`snl eval --crlb --fim-at truth`): RMSE bound %.6g over the %d sensors of the anchored rigid "
+                  "part.\n" % (c["crlb_rmse"], c["crlb_sensors"]))
+        else:
+            print("CRLB (`snl eval --crlb --fim-at truth`): not computed: %s.\n" % c.get("crlb_reason", "?"))
     hdr = ["method", "rep", "load", "iters", "term", "solve_s", "cpu_s"]
     hdr += ["iters to %g" % t for t in TARGETS] + ["s to %g" % t for t in TARGETS]
     hdr += ["final ML cost", "excess", "rmse_loc"]
