@@ -1,6 +1,6 @@
 #!/usr/bin/python3
-"""Prints every number that docs/results.md, docs/experiments.md and
-docs/ceres.md derive from their kept tables (ratios, ranges, counts), so each
+"""Prints every number that docs/results.md and docs/experiments.md
+derive from their kept tables (ratios, ranges, counts), so each
 such number comes from a file in docs/data/ and this command.
 
 Usage: /usr/bin/python3 tools/doc_claims.py [--trajectories TRAJ_A.csv TRAJ_B.csv]
@@ -110,22 +110,10 @@ def trajectory_counts(net, path):
             print(f"    sigma {sigma}: largest recorded cost / final cost of a run = {spike:.3g}")
 
 
-def ceres_md():
-    print("== docs/ceres.md (docs/data/perf/results-2026-11-29-lanes-ceres.txt, -ceres.txt)")
-    now = [r for r in md_rows("perf/results-2026-11-29-lanes-ceres.txt") if r[0] != "n"]
-    old = [r for r in md_rows("perf/results-2026-11-29-ceres.txt") if r and r[0].isdigit()]
-    for n in ("10000", "100000", "1000000"):
-        rm = [float(r[7]) for r in now if r[0] == n]
-        print(f"  n={n}: RMSE spread (max-min)/min = {100 * (max(rm) - min(rm)) / min(rm):.2f}%")
-        t = [float(r[3]) for r in now + old if r[0] == n and r[1].startswith("Ceres")]
-        print(f"  n={n}: Ceres solve_s in the two runs {t}, differ by {100 * (max(t) - min(t)) / min(t):.0f}%")
-
-
 def main(argv):
     traj = argv[argv.index("--trajectories") + 1:][:2] if "--trajectories" in argv else None
     results_md()
     experiments_md(traj)
-    ceres_md()
 
 
 if __name__ == "__main__":

@@ -124,7 +124,7 @@ double rmse(const snl::Network& net, const std::vector<double>& x, bool only_loc
 int run(int argc, char** argv) {
   std::string network, init, output, json, linalg = "suitesparse";
   int max_iter = 100, threads = 2;
-  double tol = 1e-6;
+  double tol = 1e-6, gradient_tol = 1e-10, parameter_tol = 1e-8;  // Ceres' defaults but tol
   bool quiet = false;
   CLI::App app{"ML sensor network localization with Ceres Solver (LM, sparse normal Cholesky)"};
   app.add_option("network", network, "network file")->required();
@@ -133,6 +133,10 @@ int run(int argc, char** argv) {
   app.add_option("--json", json, "write a JSON summary (fields as `snl solve --json`)");
   app.add_option("--max-iter", max_iter, "LM iteration limit")->capture_default_str();
   app.add_option("--tol", tol, "Ceres function_tolerance (relative cost decrease)")->capture_default_str();
+  app.add_option("--gradient-tol", gradient_tol, "Ceres gradient_tolerance (max-norm of the projected gradient)")
+      ->capture_default_str();
+  app.add_option("--parameter-tol", parameter_tol, "Ceres parameter_tolerance (relative step size)")
+      ->capture_default_str();
   app.add_option("--threads", threads, "Ceres threads (Jacobian evaluation)")->capture_default_str();
   app.add_option("--linear-algebra", linalg, "suitesparse (CHOLMOD) | eigen (Eigen SimplicialLDLT)")
       ->capture_default_str();
@@ -172,6 +176,8 @@ int run(int argc, char** argv) {
     throw snl::Error("--linear-algebra must be suitesparse or eigen");
   opt.max_num_iterations = max_iter;
   opt.function_tolerance = tol;
+  opt.gradient_tolerance = gradient_tol;
+  opt.parameter_tolerance = parameter_tol;
   opt.num_threads = threads;
   opt.minimizer_progress_to_stdout = !quiet;
   opt.logging_type = quiet ? ceres::SILENT : ceres::PER_MINIMIZER_ITERATION;
@@ -200,13 +206,17 @@ int run(int argc, char** argv) {
   r.num_sensors = n;
   r.row_offset = 0;
   r.positions = x;
-  std::vector<double> hi, hc, ht;
+  // Ceres prints a rejected step's candidate cost; the history keeps the
+  // iterate's cost (unchanged by a rejected step), as snl's histories do.
+  std::vector<double> hi, hc, ht, hs;
   for (const auto& it : sum.iterations) {
+    const bool keep = it.iteration == 0 || it.step_is_successful;
     hi.push_back(it.iteration);
-    hc.push_back(it.cost);
+    hc.push_back(keep || hc.empty() ? it.cost : hc.back());
     ht.push_back(it.cumulative_time_in_seconds);
+    hs.push_back(keep ? 1.0 : 0.0);
   }
-  r.history = {{"iteration", hi}, {"ml_cost", hc}, {"elapsed", ht}};
+  r.history = {{"iteration", hi}, {"ml_cost", hc}, {"elapsed", ht}, {"step_accepted", hs}};
   r.string_attrs = {{"termination", ceres::TerminationTypeToString(sum.termination_type)},
                     {"message", sum.message},
                     {"network", network},
@@ -246,6 +256,9 @@ int run(int argc, char** argv) {
         .add("write_seconds", t_write - t_solve)
         .add("linear_solver_seconds", sum.linear_solver_time_in_seconds)
         .add("jacobian_seconds", sum.jacobian_evaluation_time_in_seconds)
+        .add("function_tolerance", tol)
+        .add("gradient_tolerance", gradient_tol)
+        .add("parameter_tolerance", parameter_tol)
         .add("threads", threads)
         .add("linear_algebra", linalg)
         .add("num_sensors", static_cast<std::int64_t>(n))

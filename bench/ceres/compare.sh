@@ -1,70 +1,85 @@
 #!/usr/bin/env bash
-# Peer comparison (docs/ceres.md): snl MM on 2 ranks vs Ceres LM (central), both
-# started from the same relaxation output R0.h5.
-#   usage: bench/ceres/compare.sh [WORKDIR] [N ...]     (default N: 10000 100000 1000000)
-# Needs a build with -DSNL_BUILD_CERES=ON (BUILD, default ./build). Recorded
-# runs: docs/data/perf/results-*-ceres.txt.
-# Stopping rules (override through the environment):
-#   relaxation: --tol 1e-6 --max-iter $RELAX_ITER (300)
-#   MM:         --tol 1e-6 --max-iter $MM_ITER (300)
-#   Ceres LM:   function_tolerance 1e-6, --max-iter $CERES_ITER (50, Ceres' default)
-# TABLE_ONLY=1 prints the table of the runs already in WORKDIR.
+# Peer comparison (docs/ceres.md): snl MM, snl mm-accel and Ceres LM (central),
+# all three started from the same relaxation output R0.h5 (the pipeline's first
+# phase: `snl solve --algorithm relaxation` with the default stopping rule) and
+# run until they converge or hit their caps; bench/ceres/table.py then finds the
+# lowest final ML cost and each run's iterations and time to common targets.
+#   usage: bench/ceres/compare.sh OUT WORK N [N ...]
+# OUT: small raw outputs (JSON summaries, histories as CSV, logs with `uptime`),
+# e.g. docs/data/ceres; WORK: networks and result files (large). Existing
+# networks/starts in WORK are reused; each rerun of the refinements adds a rep.
+# Networks: the default generator (`snl generate --sensors N --seed 1`: region
+# grown at constant density, sigma 0.14 of the link radius, degree 16, anchors
+# auto). Needs a build with -DSNL_BUILD_CERES=ON (BUILD, default ./build).
+# Environment (defaults): NP (1) snl ranks, THREADS (1) Ceres threads,
+#   SNL_TOL (1e-7, gradient rule), SNL_ITER (20000), MM_ITER (SNL_ITER; MM's cap), CERES_ITER (100),
+#   ALGS ("mm mm-accel": the snl refinements to run),
+#   CERES_TOL (1e-12: function, gradient and parameter tolerance), CRLB (1: `snl eval --crlb`
+#   on the network once), LOCK (/work/wt/bench.lock; every command runs under flock).
 set -euo pipefail
+{  # the whole script is parsed before it runs: editing it during a run is safe
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
 BUILD=${BUILD:-$ROOT/build}
 SNL=$BUILD/bin/snl
 CERES=$BUILD/bin/ceres_ml
-WORK=${1:-/tmp/snl-ceres}
-shift || true
-SIZES=("$@")
-[ ${#SIZES[@]} -gt 0 ] || SIZES=(10000 100000 1000000)
-RELAX_ITER=${RELAX_ITER:-300}
-MM_ITER=${MM_ITER:-300}
-CERES_ITER=${CERES_ITER:-50}
-NP=${NP:-2}
-SEED=${SEED:-1}
-export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
-MPIRUN=(mpirun -np "$NP" --bind-to core)
-mkdir -p "$WORK"
+OUT=$1 WORK=$2
+shift 2
+NP=${NP:-1} THREADS=${THREADS:-1}
+SNL_TOL=${SNL_TOL:-1e-7} SNL_ITER=${SNL_ITER:-20000}
+MM_ITER=${MM_ITER:-$SNL_ITER}
+ALGS=${ALGS:-mm mm-accel}
+CERES_ITER=${CERES_ITER:-100} CERES_TOL=${CERES_TOL:-1e-12}
+CRLB=${CRLB:-1}
+LOCK=${LOCK:-/work/wt/bench.lock}
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 for f in "$SNL" "$CERES"; do [ -x "$f" ] || { echo "missing $f (build with -DSNL_BUILD_CERES=ON)" >&2; exit 1; }; done
-
-# peak RSS (MiB) of a command through GNU time, when available
-TIME=()
-[ -x /usr/bin/time ] && TIME=(/usr/bin/time -f "%M")
-
-for n in "${SIZES[@]}"; do
-  [ -z "${TABLE_ONLY:-}" ] || break  # TABLE_ONLY=1: only print the table of existing runs
-  d=$WORK/n$n
-  mkdir -p "$d"
-  net=$d/net.h5
-  # 1% random anchors: with the 4 corner anchors alone almost nothing is anchored at degree 6.
-  [ -f "$net" ] || "$SNL" generate -o "$net" --sensors "$n" --avg-degree 6 --sigma 0.01 --seed "$SEED" \
-    --anchors $((n / 100)) --localizable no -q
-  if [ ! -f "$d/R0.h5" ]; then
-    "${MPIRUN[@]}" "$SNL" solve "$net" -o "$d/R0.h5" --algorithm relaxation --tol 1e-6 --max-iter "$RELAX_ITER" --history-every 50 \
-      --json "$d/R0.json" -q
-  fi
-  "${MPIRUN[@]}" "$SNL" solve "$net" -o "$d/mm.h5" --algorithm mm --init "$d/R0.h5" --tol 1e-6 \
-    --max-iter "$MM_ITER" --history-every 50 --json "$d/mm.json" -q
-  "${TIME[@]}" "$CERES" "$net" "$d/R0.h5" -o "$d/ceres.h5" --json "$d/ceres.json" --max-iter "$CERES_ITER" \
-    --tol 1e-6 --threads "$NP" -q > "$d/ceres.log" 2> "$d/ceres.err" || { cat "$d/ceres.err" >&2; exit 1; }
-  tail -n 1 "$d/ceres.err" > "$d/ceres.rss_kb" || true
-done
-
-# One table. Wall = whole command (read + setup + solve + write); solve = the iterations only.
-python3 - "$WORK" "${SIZES[@]}" <<'PY'
-import json, sys, os
-work, sizes = sys.argv[1], sys.argv[2:]
-hdr = ("n", "method", "wall_s", "solve_s", "iters", "term", "ml_cost", "rmse", "rmse_loc")
-print("| " + " | ".join(hdr) + " |")
-print("|" + "---|" * len(hdr))
-def fmt(x, f):
-    return "-" if x is None else format(x, f)
-for n in sizes:
-    d = os.path.join(work, "n" + n)
-    for name, label in (("R0", "relaxation (start), 2 ranks"), ("mm", "snl MM, 2 ranks"), ("ceres", "Ceres LM, 1 proc")):
-        j = json.load(open(os.path.join(d, name + ".json")))
-        print("| %s | %s | %s | %s | %d | %s | %s | %s | %s |" % (
-            n, label, fmt(j["wall_seconds"], ".2f"), fmt(j["solve_seconds"], ".2f"), j["iterations"],
-            j["termination"], fmt(j["ml_cost"], ".6g"), fmt(j.get("rmse"), ".6g"), fmt(j.get("rmse_localizable"), ".6g")))
+RUN=()
+[ "$NP" -gt 1 ] && RUN=(mpirun -np "$NP" --bind-to core)
+# locked command with the load before and after and GNU time's wall/CPU/RSS
+timed() {  # LOG CMD...
+  local log=$1; shift
+  { echo "# $(date -u +%FT%TZ) $*"; echo "# before: $(uptime)"; } >> "$log"
+  flock "$LOCK" /usr/bin/time -f "# time: %e s wall, %U s user, %S s sys, %M KB max RSS" "$@" >> "$log" 2>&1
+  echo "# after: $(uptime)" >> "$log"
+}
+history_csv() {  # RESULT.h5 OUT.csv
+  /usr/bin/python3 - "$1" "$2" <<'PY'
+import sys, h5py, numpy as np
+h = h5py.File(sys.argv[1], "r")["history"]
+cols = [c for c in ("iteration", "ml_cost", "elapsed", "step_accepted", "rmse") if c in h]
+np.savetxt(sys.argv[2], np.column_stack([h[c][:] for c in cols]), delimiter=",", header=",".join(cols),
+           comments="", fmt="%.17g")
 PY
+}
+
+for n in "$@"; do
+  o=$OUT/n$n w=$WORK/n$n
+  mkdir -p "$o" "$w"
+  net=$w/net.h5
+  [ -f "$net" ] || timed "$o/generate.log" "$SNL" generate -o "$net" --sensors "$n" --seed 1
+  [ -f "$w/R0.h5" ] || timed "$o/R0.log" "${RUN[@]}" "$SNL" solve "$net" -o "$w/R0.h5" --algorithm relaxation \
+    --history-every 100 --json "$o/R0.json"
+  rep=1
+  while [ -f "$o/ceres.$rep.json" ]; do rep=$((rep + 1)); done
+  for alg in $ALGS; do
+    cap=$SNL_ITER
+    [ $alg = mm ] && cap=$MM_ITER
+    timed "$o/$alg.$rep.log" "${RUN[@]}" "$SNL" solve "$net" -o "$w/$alg.h5" --algorithm $alg --init "$w/R0.h5" \
+      --tol "$SNL_TOL" --max-iter "$cap" --history-every 10 --json "$o/$alg.$rep.json"
+    history_csv "$w/$alg.h5" "$o/$alg.$rep.history.csv"
+  done
+  timed "$o/ceres.$rep.log" "$CERES" "$net" "$w/R0.h5" -o "$w/ceres.h5" --json "$o/ceres.$rep.json" \
+    --max-iter "$CERES_ITER" --tol "$CERES_TOL" --gradient-tol "$CERES_TOL" --parameter-tol "$CERES_TOL" \
+    --threads "$THREADS" -q
+  history_csv "$w/ceres.h5" "$o/ceres.$rep.history.csv"
+  /usr/bin/python3 "$ROOT/bench/ceres/errors.py" "$w" > "$o/errors.$rep.txt"
+  if [ "$CRLB" = 1 ] && [ ! -f "$o/crlb.json" ]; then
+    # the bound on the anchored rigid part, Fisher information at the truth (a property of the network)
+    timed "$o/crlb.log" "$SNL" eval "$net" "$w/mm-accel.h5" --crlb --fim-at truth --no-covariance --json "$o/crlb.json"
+  fi
+done
+# raw files without machine paths
+for n in "$@"; do sed -i "s#$BUILD#BUILD#g; s#$WORK#WORK#g" "$OUT/n$n"/*.log "$OUT/n$n"/*.json; done
+/usr/bin/python3 "$ROOT/bench/ceres/table.py" "$OUT"
+exit
+}
