@@ -131,6 +131,9 @@ struct Summary {
   /// Time inside Algorithm::iterate() only (no history metrics, reductions or
   /// checkpoints), max over ranks; and the halo wait within it, max over ranks.
   double iterate_seconds = 0, iterate_wait_seconds = 0;
+  /// Bookkeeping outside iterate(), max over ranks: the stopping sums and
+  /// tests of every pass, and the records (history metrics, callbacks).
+  double stop_test_seconds = 0, record_seconds = 0;
   /// Per phase (pipeline: relaxation then mm), same meaning as iterate_seconds.
   std::vector<std::pair<std::string, double>> phase_iterate_seconds;
   /// Algorithm state (iterates, edge variables), all ranks; max over phases.
