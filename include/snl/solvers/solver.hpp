@@ -66,8 +66,8 @@ struct SolverOptions {
   /// (the relaxation's grad f_hat at the extrapolated point). 0 disables it.
   double grad_tol = 0.0;
   /// Record history (and report progress) every this many iterations; 0: auto
-  /// (every iteration up to 2000, else about 1000 records per phase; at least
-  /// every 10 iterations above 100,000 sensors).
+  /// (every iteration up to 2000, else about 1000 records per phase; above
+  /// 100,000 sensors at least every 100 iterations, at gradient tests).
   std::int64_t history_every = 0;
   /// Consensus rounds per BB iteration (Calafiore et al. use 20).
   int bb_rounds = 20;
