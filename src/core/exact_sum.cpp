@@ -54,18 +54,24 @@ double ExactSum::value() const {
   return neg ? -r : r;
 }
 
-void allreduce_exact(ExactSum* sums, int n, MPI_Comm comm) {
-  if (n < 0 || n > kMaxExactSums) throw std::logic_error("allreduce_exact: too many sums");
-  std::int64_t buf[kMaxExactSums * ExactSum::kWords];
+void allreduce_exact(ExactSum* sums, int n, MPI_Comm comm) { allreduce_exact(sums, n, comm, nullptr, 0); }
+
+void allreduce_exact(ExactSum* sums, int n, MPI_Comm comm, std::int64_t* extra, int n_extra) {
+  if (n < 0 || n > kMaxExactSums || n_extra < 0 || n_extra > kMaxExactExtra)
+    throw std::logic_error("allreduce_exact: too many sums");
+  std::int64_t buf[kMaxExactSums * ExactSum::kWords + kMaxExactExtra];
   for (int j = 0; j < n; ++j) {
     sums[j].normalize();  // digits in [0, 2^32): a sum over 2^31 ranks cannot overflow
     for (int i = 0; i < ExactSum::kWords; ++i) buf[j * ExactSum::kWords + i] = sums[j].words()[i];
   }
-  MPI_Allreduce(MPI_IN_PLACE, buf, n * ExactSum::kWords, MPI_INT64_T, MPI_SUM, comm);
+  const int words = n * ExactSum::kWords;
+  for (int i = 0; i < n_extra; ++i) buf[words + i] = extra[i];
+  MPI_Allreduce(MPI_IN_PLACE, buf, words + n_extra, MPI_INT64_T, MPI_SUM, comm);
   for (int j = 0; j < n; ++j) {
     for (int i = 0; i < ExactSum::kWords; ++i) sums[j].words()[i] = buf[j * ExactSum::kWords + i];
     sums[j].normalize();
   }
+  for (int i = 0; i < n_extra; ++i) extra[i] = buf[words + i];
 }
 
 }  // namespace snl::detail

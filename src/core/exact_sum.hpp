@@ -71,5 +71,9 @@ class ExactSum {
 /// MPI_Allreduce of integers, exact and associative). n <= kMaxExactSums.
 constexpr int kMaxExactSums = 8;
 void allreduce_exact(ExactSum* sums, int n, MPI_Comm comm);
+/// The same, and extra[0..n_extra) summed over ranks in the same collective
+/// (n_extra <= kMaxExactExtra): counts and flags that travel with the sums.
+constexpr int kMaxExactExtra = 8;
+void allreduce_exact(ExactSum* sums, int n, MPI_Comm comm, std::int64_t* extra, int n_extra);
 
 }  // namespace snl::detail

@@ -85,8 +85,11 @@ void model_gradient_impl(const LocalizationProblem& prob, const double* x, doubl
   }
 }
 
+// Either gradient over [begin, end) and, with `ml`, this rank's terms of f(x)
+// in the same pass (costs_impl's terms: each edge at its smaller global id).
 template <int P, bool kRelaxed>
-void gradient_impl(const LocalizationProblem& prob, const double* x, double* g, LocalId begin, LocalId end) {
+void gradient_impl(const LocalizationProblem& prob, const double* x, double* g, LocalId begin, LocalId end,
+                   detail::ExactSum* ml = nullptr) {
   if (prob.model().active()) return model_gradient_impl<P, kRelaxed>(prob, x, g, begin, end);
   const auto& gr = prob.graph();
   const auto& off = gr.offsets();
@@ -96,13 +99,19 @@ void gradient_impl(const LocalizationProblem& prob, const double* x, double* g, 
   const auto& aid = prob.anchor_ids();
   const auto& ar = prob.anchor_ranges();
   const double* anc = prob.anchors().data();
+  auto ml_term = [](const double* z, double rho) {
+    const double nz = norm<P>(z);
+    return 0.5 * (nz - rho) * (nz - rho);
+  };
   for (LocalId v = begin; v < end; ++v) {
     double acc[P] = {};
     const double* xv = x + std::size_t(v) * P;
+    const GlobalId gv = ml ? gr.global_id(v) : 0;
     for (auto e = off[v]; e < off[v + 1]; ++e) {
       const double* xu = x + std::size_t(adj[e]) * P;
       double z[P];
       for (int c = 0; c < P; ++c) z[c] = xv[c] - xu[c];
+      if (ml && gr.global_id(adj[e]) > gv) ml->add(ml_term(z, ev[e]));
       if (kRelaxed)
         add_disk_residual<P>(z, ev[e], acc);
       else
@@ -112,6 +121,7 @@ void gradient_impl(const LocalizationProblem& prob, const double* x, double* g, 
       const double* a = anc + std::size_t(aid[e]) * P;
       double z[P];
       for (int c = 0; c < P; ++c) z[c] = xv[c] - a[c];
+      if (ml) ml->add(ml_term(z, ar[e]));
       if (kRelaxed)
         add_disk_residual<P>(z, ar[e], acc);
       else
@@ -121,7 +131,11 @@ void gradient_impl(const LocalizationProblem& prob, const double* x, double* g, 
   }
 }
 
-template <int P>
+// Which sums costs_impl forms: the solver's tests and records need one of them,
+// and each exact add costs about as much as the edge's arithmetic.
+enum CostMask : unsigned { kMl = 1, kRelaxed = 2, kCertificate = 4, kApriori = 8, kAllCosts = 15 };
+
+template <int P, unsigned M>
 CostTerms costs_impl(const LocalizationProblem& prob, const double* x) {
   const auto& gr = prob.graph();
   const auto& off = gr.offsets();
@@ -131,20 +145,24 @@ CostTerms costs_impl(const LocalizationProblem& prob, const double* x) {
   const auto& aid = prob.anchor_ids();
   const auto& ar = prob.anchor_ranges();
   const double* anc = prob.anchors().data();
-  // Exact sums of the per-edge terms: the same costs for any partition.
+  // Exact sums of the per-edge terms: the same costs for any partition. Being
+  // exact, each sum is the same whichever others are formed beside it.
   detail::ExactSum t[4];  // ml, relaxed, certificate, apriori
   const MeasurementModel& mo = prob.model();
   // Weighted / Huber terms w rho(r) (weights.hpp); with the unweighted l2
   // model the expressions below, as they always were.
   auto term = [&](const double* z, double rho, double w) {
     const double nz = norm<P>(z);
-    const double ml = mo.active() ? w * loss_value(mo.huber_delta, std::abs(nz - rho)) : 0.5 * (nz - rho) * (nz - rho);
-    t[0].add(ml);
-    if (nz > rho)
-      t[1].add(ml);  // d_B(rho)(z)^2 / 2 = (|z| - rho)^2 / 2 outside the ball
-    else
-      t[2].add(ml);  // relaxed term is zero: eq. (22) collects the nonconvex one
-    t[3].add(mo.active() ? w * loss_value(mo.huber_delta, rho) : 0.5 * rho * rho);
+    if (M & (kMl | kCertificate) || ((M & kRelaxed) && nz > rho)) {
+      const double ml = mo.active() ? w * loss_value(mo.huber_delta, std::abs(nz - rho)) : 0.5 * (nz - rho) * (nz - rho);
+      if (M & kMl) t[0].add(ml);
+      if (nz > rho) {
+        if (M & kRelaxed) t[1].add(ml);  // d_B(rho)(z)^2 / 2 = (|z| - rho)^2 / 2 outside the ball
+      } else if (M & kCertificate) {
+        t[2].add(ml);  // relaxed term is zero: eq. (22) collects the nonconvex one
+      }
+    }
+    if (M & kApriori) t[3].add(mo.active() ? w * loss_value(mo.huber_delta, rho) : 0.5 * rho * rho);
   };
   for (LocalId v = 0; v < gr.num_owned(); ++v) {
     const double* xv = x + std::size_t(v) * P;
@@ -163,15 +181,33 @@ CostTerms costs_impl(const LocalizationProblem& prob, const double* x) {
       term(z, ar[e], mo.anchor_weight(e));
     }
   }
-  detail::allreduce_exact(t, 4, prob.comm());
-  return {t[0].value(), t[1].value(), t[2].value(), t[3].value()};
+  // Reduce only the sums formed (one collective, fewer words).
+  detail::ExactSum formed[4];
+  int n = 0;
+  for (int j = 0; j < 4; ++j)
+    if (M & (1u << j)) formed[n++] = t[j];
+  detail::allreduce_exact(formed, n, prob.comm());
+  double out[4] = {0, 0, 0, 0};
+  n = 0;
+  for (int j = 0; j < 4; ++j)
+    if (M & (1u << j)) out[j] = formed[n++].value();
+  return {out[0], out[1], out[2], out[3]};
+}
+
+template <unsigned M>
+CostTerms costs_of(const LocalizationProblem& prob, const double* x) {
+  if (prob.dim() == 1) return costs_impl<1, M>(prob, x);
+  return prob.dim() == 2 ? costs_impl<2, M>(prob, x) : costs_impl<3, M>(prob, x);
 }
 
 }  // namespace
 
-CostTerms evaluate_costs(const LocalizationProblem& prob, const double* x) {
-  if (prob.dim() == 1) return costs_impl<1>(prob, x);
-  return prob.dim() == 2 ? costs_impl<2>(prob, x) : costs_impl<3>(prob, x);
+CostTerms evaluate_costs(const LocalizationProblem& prob, const double* x) { return costs_of<kAllCosts>(prob, x); }
+
+double evaluate_ml_cost(const LocalizationProblem& prob, const double* x) { return costs_of<kMl>(prob, x).ml; }
+
+double evaluate_relaxed_cost(const LocalizationProblem& prob, const double* x) {
+  return costs_of<kRelaxed>(prob, x).relaxed;
 }
 
 void relaxed_gradient(const LocalizationProblem& prob, const double* x, double* g, LocalId begin, LocalId end) {
@@ -190,6 +226,24 @@ void ml_gradient(const LocalizationProblem& prob, const double* x, double* g, Lo
     gradient_impl<2, false>(prob, x, g, begin, end);
   else
     gradient_impl<3, false>(prob, x, g, begin, end);
+}
+
+double ml_cost_and_gradient(const LocalizationProblem& prob, const double* x, double* g, bool relaxed) {
+  const LocalId n = prob.num_owned();
+  if (prob.model().active()) {  // the weighted / Huber terms: two passes
+    const double f = evaluate_ml_cost(prob, x);
+    relaxed ? relaxed_gradient(prob, x, g, 0, n) : ml_gradient(prob, x, g, 0, n);
+    return f;
+  }
+  detail::ExactSum f;
+  if (prob.dim() == 1)
+    relaxed ? gradient_impl<1, true>(prob, x, g, 0, n, &f) : gradient_impl<1, false>(prob, x, g, 0, n, &f);
+  else if (prob.dim() == 2)
+    relaxed ? gradient_impl<2, true>(prob, x, g, 0, n, &f) : gradient_impl<2, false>(prob, x, g, 0, n, &f);
+  else
+    relaxed ? gradient_impl<3, true>(prob, x, g, 0, n, &f) : gradient_impl<3, false>(prob, x, g, 0, n, &f);
+  detail::allreduce_exact(&f, 1, prob.comm());
+  return f.value();
 }
 
 double relaxation_lipschitz(const LocalizationProblem& prob) {

@@ -101,7 +101,7 @@ class Relaxation final : public Algorithm {
   }
   double objective() override {
     prob_.graph().halo().exchange(x_.data(), prob_.dim());
-    return evaluate_costs(prob_, x_.data()).relaxed;
+    return evaluate_relaxed_cost(prob_, x_.data());
   }
   void change_norms(double* d, double* s) const override {
     *d = diff_sq_;

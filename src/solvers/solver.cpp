@@ -163,6 +163,8 @@ class Solver::Run {
     std::int64_t stop_every = 1;  // --stop gradient: the test's interval (a multiple of every)
     double prev_obj = 0;        // for check_monotone
     double time = 0;            // in iterate()
+    double stop_time = 0;       // in the stopping sums and tests (reduce, relative_gradient)
+    double record_time = 0;     // in records (history metrics, callbacks)
     TerminationType term = TerminationType::kNoConvergence;
     std::string msg;
   };
@@ -176,7 +178,7 @@ class Solver::Run {
     double rel_grad = NAN;   // --stop gradient, where tested
   };
 
-  void add_stop_terms(Phase& ph, bool with_grad, detail::ExactSum* sums);
+  bool add_stop_terms(Phase& ph, bool with_grad, bool exact, detail::ExactSum* sums);
   double grad_norm(Phase& ph);
   double relative_gradient(Phase& ph);
   void start_phase(Phase& ph);
@@ -221,6 +223,7 @@ class Solver::Run {
   bool checkpointing_;
   bool stop_all_ = false;
   double iter_time_ = 0, iter_wait_ = 0;
+  double stop_time_ = 0, record_time_ = 0;  // summed over phases, this rank
 };
 
 Summary Solver::solve(const std::vector<double>& x0, std::vector<double>* x_out) {
@@ -307,14 +310,19 @@ void Solver::Run::start_phase(Phase& ph) {
   }
 }
 
+// The automatic record interval above 100,000 sensors (at least).
+constexpr std::int64_t kLargeRecordEvery = 100;
+
 void Solver::Run::set_pass_sizes(Phase& ph) const {
   // Auto: every iteration for small runs; about 1000 records per phase for
-  // long ones; at least every 10 iterations on large networks, where a
-  // record (an extra exchange and two reductions) costs about an iteration.
+  // long ones; at least every 10 iterations on large networks, where the
+  // gradient test (an extra exchange and two passes over the edges) costs
+  // about two iterations.
   std::int64_t every = opt_.history_every;
+  const bool large = prob_.num_sensors() > 100000;
   if (every <= 0) {
     every = opt_.max_iter <= 2000 ? 1 : (opt_.max_iter + 999) / 1000;
-    if (prob_.num_sensors() > 100000) every = std::max<std::int64_t>(every, 10);
+    if (large) every = std::max<std::int64_t>(every, 10);
   }
   // Temporal blocking: passes of up to `block` iterations, ending at every
   // record and checkpoint iteration (so these see the same iterates); the
@@ -325,19 +333,28 @@ void Solver::Run::set_pass_sizes(Phase& ph) const {
   // The gradient test costs about an iteration (an exchange, a pass over the
   // edges): at most every 10 iterations, at records (which then reuse its f).
   ph.stop_every = every * ((10 + every - 1) / every);
+  // A record (the history's costs, gradient norm and errors: three more passes)
+  // costs about three iterations on large networks (docs/performance.md,
+  // "Bookkeeping"): there the automatic interval is a multiple of the test's,
+  // at least 100, which leaves the tests, and so the iterates, where they were.
+  if (opt_.history_every <= 0 && large) ph.every = ph.stop_every * ((kLargeRecordEvery + ph.stop_every - 1) / ph.stop_every);
 }
 
 bool Solver::Run::pass(Phase& ph) {
   iterate(ph, pass_length(ph));
+  const double t0 = MPI_Wtime();
   PassResult r = reduce(ph);
   if (opt_.stop == "gradient" && opt_.stop_tol() > 0 && r.finite && (ph.k % ph.stop_every == 0 || ph.k == opt_.max_iter))
     r.rel_grad = relative_gradient(ph);
+  ph.stop_time += MPI_Wtime() - t0;
   if (!r.finite) return stop(ph, TerminationType::kFailure, "non-finite iterate");
   const bool converged = test_stop(ph, r);
   if (opt_.check_monotone && ph.info->monotone_surrogate) check_monotone(ph);
   const bool last = converged || ph.k == opt_.max_iter;
-  if ((ph.k % ph.every == 0 || last) && record(ph, r))
-    return stop(ph, TerminationType::kUserAbort, "stopped by a callback");
+  const double t1 = MPI_Wtime();
+  const bool abort = (ph.k % ph.every == 0 || last) && record(ph, r);
+  ph.record_time += MPI_Wtime() - t1;
+  if (abort) return stop(ph, TerminationType::kUserAbort, "stopped by a callback");
   if (converged) {
     ph.term = TerminationType::kConvergence;
     return false;
@@ -377,36 +394,60 @@ void Solver::Run::iterate(Phase& ph, std::int64_t n) {
 }
 
 // One reduction per pass: stopping sums, and flags every rank must agree on
-// (a stop signal on any rank; rank 0's checkpoint clock). The sums are exact
-// (detail::ExactSum), so the stopping test is the same for any partition; the
-// gradient is summed only where --grad-tol or a record needs it.
+// (a stop signal on any rank; rank 0's checkpoint clock), in one collective.
+// The sums are exact (detail::ExactSum), so the stopping test is the same for
+// any partition; the gradient is summed only where --grad-tol or a record
+// needs it, and the change norms only where the papers rule or a record reads
+// them: elsewhere they only check that the iterate is finite, which plain sums
+// decide unless one comes near overflow (then every rank forms the exact ones).
 Solver::Run::PassResult Solver::Run::reduce(Phase& ph) {
-  const bool with_grad = opt_.grad_tol > 0 || ph.k % ph.every == 0 || ph.k == opt_.max_iter;
+  const bool record_due = ph.k % ph.every == 0 || ph.k == opt_.max_iter;
+  const bool with_grad = opt_.grad_tol > 0 || record_due;
+  const bool exact = opt_.stop != "gradient" || opt_.grad_tol > 0 || ph.info->one_shot || record_due;
   detail::ExactSum sums[3];  // ||x(k)-x(k-1)||^2, ||x(k)||^2, ||g||^2
-  add_stop_terms(ph, with_grad, sums);
-  double flags[2] = {(ckpt_.stop_on_signal && stop_signal_received()) ? 1.0 : 0.0,
-                     (root_ && checkpointing_ && ckpt_.seconds > 0 && MPI_Wtime() - last_ckpt_ >= ckpt_.seconds) ? 1.0 : 0.0},
-         glob[2];
-  detail::allreduce_exact(sums, with_grad ? 3 : 2, comm_);
-  MPI_Allreduce(flags, glob, 2, MPI_DOUBLE, MPI_MAX, comm_);
-  const double d = sums[0].value(), x = sums[1].value();
+  const bool plain_ok = add_stop_terms(ph, with_grad, exact, sums);
+  // Summed over ranks: > 0 means "on some rank" (signal, clock, a plain sum not decisive).
+  std::int64_t flags[3] = {(ckpt_.stop_on_signal && stop_signal_received()) ? 1 : 0,
+                           (root_ && checkpointing_ && ckpt_.seconds > 0 && MPI_Wtime() - last_ckpt_ >= ckpt_.seconds) ? 1 : 0,
+                           plain_ok ? 0 : 1};
+  const int n_sums = !exact ? 0 : with_grad ? 3 : 2;
+  detail::allreduce_exact(sums, n_sums, comm_, flags, 3);
   PassResult r;
+  r.signalled = flags[0] > 0;
+  r.clock = flags[1] > 0;
+  r.has_gnorm = with_grad;
+  if (!exact && flags[2] == 0) {  // every rank's plain sums finite and far from overflow
+    r.rel = NAN;  // read by neither the gradient rule nor a record
+    return r;
+  }
+  if (!exact) {  // with_grad is false here: the exact change norms, as below
+    for (auto& t : sums) t.clear();
+    add_stop_terms(ph, false, true, sums);
+    detail::allreduce_exact(sums, 2, comm_);
+  }
+  const double d = sums[0].value(), x = sums[1].value();
   r.rel = x > 0 ? std::sqrt(d / x) : std::sqrt(d);
   r.gnorm = std::sqrt(sums[2].value());
-  r.has_gnorm = with_grad;
   r.finite = std::isfinite(d) && std::isfinite(x);
-  r.signalled = glob[0] > 0;
-  r.clock = glob[1] > 0;
   return r;
 }
 
 // This rank's terms of the stopping sums: per owned node where the method
 // keeps x(k-1) and its gradient (the same terms for any partition), else the
-// method's own partial sums.
-void Solver::Run::add_stop_terms(Phase& ph, bool with_grad, detail::ExactSum* sums) {
+// method's own partial sums. Without `exact` (and where the method keeps
+// x(k-1)) only plain sums are formed; returns whether they are finite and
+// below 1e290, i.e. whether they show the exact sums over all ranks finite.
+bool Solver::Run::add_stop_terms(Phase& ph, bool with_grad, bool exact, detail::ExactSum* sums) {
   const LocalId n = prob_.num_owned();
   const double* x = ph.alg->positions().data();
-  if (const double* prev = ph.alg->previous_positions()) {
+  if (const double* prev = ph.alg->previous_positions(); prev && !exact) {
+    double dd = 0, xs = 0;
+    for (std::size_t t = 0; t < std::size_t(n) * p_; ++t) {
+      dd += (x[t] - prev[t]) * (x[t] - prev[t]);
+      xs += x[t] * x[t];
+    }
+    return dd < 1e290 && xs < 1e290;  // false for NaN
+  } else if (prev) {
     for (LocalId v = 0; v < n; ++v) {
       double dd = 0, xs = 0;
       for (int c = 0; c < p_; ++c) {
@@ -422,26 +463,28 @@ void Solver::Run::add_stop_terms(Phase& ph, bool with_grad, detail::ExactSum* su
     ph.alg->change_norms(&d, &s);
     sums[0].add(d);
     sums[1].add(s);
+    if (!exact) return std::isfinite(d) && std::isfinite(s) && d < 1e290 && s < 1e290;
   }
-  if (!with_grad || !std::isfinite(ph.alg->grad_norm_sq())) return;
+  if (!with_grad || !std::isfinite(ph.alg->grad_norm_sq())) return true;
   const std::int64_t b0 = halo_.bytes_sent();  // a ghost exchange here is instrumentation
   const double* g = ph.alg->gradient_rows();
   instrumentation_bytes_ += halo_.bytes_sent() - b0;
   if (!g) {
     sums[2].add(ph.alg->grad_norm_sq());
-    return;
+    return true;
   }
   for (LocalId v = 0; v < n; ++v) {
     double gs = 0;
     for (int c = 0; c < p_; ++c) gs += g[std::size_t(v) * p_ + c] * g[std::size_t(v) * p_ + c];
     sums[2].add(gs);
   }
+  return true;
 }
 
 // Collective: the gradient norm where the pass's reduction left it out.
 double Solver::Run::grad_norm(Phase& ph) {
   detail::ExactSum sums[3];
-  add_stop_terms(ph, true, sums);
+  add_stop_terms(ph, true, true, sums);
   detail::allreduce_exact(&sums[2], 1, comm_);
   return std::sqrt(sums[2].value());
 }
@@ -457,13 +500,10 @@ double Solver::Run::relative_gradient(Phase& ph) {
   const std::int64_t b0 = halo_.bytes_sent();
   halo_.exchange(xs_.data(), p_);
   instrumentation_bytes_ += halo_.bytes_sent() - b0;
-  xs_ml_ = evaluate_costs(prob_, xs_.data()).ml;
-  xs_iteration_ = total_it_;
   const AlgorithmId id = ph.info->id;
-  if (id == AlgorithmId::kMM || id == AlgorithmId::kMMAccel || id == AlgorithmId::kBB)
-    ml_gradient(prob_, xs_.data(), gs_.data(), 0, n);
-  else
-    relaxed_gradient(prob_, xs_.data(), gs_.data(), 0, n);
+  const bool relaxed = !(id == AlgorithmId::kMM || id == AlgorithmId::kMMAccel || id == AlgorithmId::kBB);
+  xs_ml_ = ml_cost_and_gradient(prob_, xs_.data(), gs_.data(), relaxed);
+  xs_iteration_ = total_it_;
   detail::ExactSum g;
   for (LocalId v = 0; v < n; ++v) {
     double s = 0;
@@ -564,6 +604,8 @@ bool Solver::Run::stop(Phase& ph, TerminationType t, std::string msg) {
 // The phase's times and result; x_ takes its final positions (the next phase's start).
 void Solver::Run::end_phase(Phase& ph) {
   iter_time_ += ph.time;
+  stop_time_ += ph.stop_time;
+  record_time_ += ph.record_time;
   double g = 0;
   MPI_Allreduce(&ph.time, &g, 1, MPI_DOUBLE, MPI_MAX, comm_);
   sum_.phase_iterate_seconds.emplace_back(ph.alg->name(), g);
@@ -608,10 +650,12 @@ Summary Solver::Run::finish(std::vector<double>* x_out) {
   double wf = sum_.wall_seconds > 0 ? halo_.wait_seconds() / sum_.wall_seconds : 0, wfm = 0;
   MPI_Allreduce(&wf, &wfm, 1, MPI_DOUBLE, MPI_MAX, comm_);
   sum_.comm_wait_fraction = wfm;
-  double it_loc[2] = {iter_time_, iter_wait_}, it_max[2];
-  MPI_Allreduce(it_loc, it_max, 2, MPI_DOUBLE, MPI_MAX, comm_);
+  double it_loc[4] = {iter_time_, iter_wait_, stop_time_, record_time_}, it_max[4];
+  MPI_Allreduce(it_loc, it_max, 4, MPI_DOUBLE, MPI_MAX, comm_);
   sum_.iterate_seconds = it_max[0];
   sum_.iterate_wait_seconds = it_max[1];
+  sum_.stop_test_seconds = it_max[2];
+  sum_.record_seconds = it_max[3];
   if (x_out) *x_out = x_;
   return std::move(sum_);
 }
@@ -623,7 +667,7 @@ void Solver::Run::metrics_at(const std::vector<double>& x, IterationSummary& it)
   } else {
     std::copy(x.begin(), x.begin() + std::size_t(prob_.num_owned()) * p_, xs_.begin());
     halo_.exchange(xs_.data(), p_);
-    it.ml_cost = evaluate_costs(prob_, xs_.data()).ml;
+    it.ml_cost = evaluate_ml_cost(prob_, xs_.data());
   }
   const ErrorMetrics em = evaluate_errors(prob_, xs_.data());
   it.rmse = em.rmse;

@@ -195,6 +195,29 @@ TEST(MetricsExact, RandomNetworksMatchPlainLoops) {
   }
 }
 
+// The solver's one-sum and one-pass forms (its stopping tests and records)
+// give evaluate_costs' and the gradients' bits.
+TEST(MetricsExact, SingleSumAndFusedFormsGiveTheSameBits) {
+  for (int dim : {2, 3}) {
+    const Network w = snl::test::merged(
+        make_network({.n = 40, .dim = dim, .radius = 0.35, .anchor_radius = 0.4, .sigma = 0.1, .seed = 22}));
+    LocalizationProblem prob(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kMetis, nullptr);
+    std::vector<double> xg(w.truth);
+    for (std::size_t t = 0; t < xg.size(); ++t) xg[t] += 0.1 * std::sin(3.0 * double(t) + 1.0);
+    const auto x = to_local(prob, xg);
+    const CostTerms c = evaluate_costs(prob, x.data());
+    EXPECT_EQ(evaluate_ml_cost(prob, x.data()), c.ml) << dim;
+    EXPECT_EQ(evaluate_relaxed_cost(prob, x.data()), c.relaxed) << dim;
+    for (bool relaxed : {false, true}) {
+      std::vector<double> g(x.size(), 0.0), h(x.size(), 0.0);
+      (relaxed ? relaxed_gradient : ml_gradient)(prob, x.data(), g.data(), 0, prob.num_owned());
+      EXPECT_EQ(ml_cost_and_gradient(prob, x.data(), h.data(), relaxed), c.ml) << dim;
+      for (std::size_t t = 0; t < std::size_t(prob.num_owned()) * dim; ++t)
+        EXPECT_EQ(g[t], h[t]) << dim << " " << relaxed << " " << t;
+    }
+  }
+}
+
 // ---- Cramér-Rao bound ----
 
 // tr(J^-1) of a small dense SPD matrix by Gauss-Jordan (no pivoting needed).

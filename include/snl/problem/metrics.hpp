@@ -20,6 +20,14 @@ struct CostTerms {
 };
 /// Collective.
 CostTerms evaluate_costs(const LocalizationProblem& prob, const double* x);
+/// Collective: evaluate_costs(prob, x).ml and .relaxed, the same bits, forming
+/// only the one sum (the solver's stopping tests and records).
+double evaluate_ml_cost(const LocalizationProblem& prob, const double* x);
+double evaluate_relaxed_cost(const LocalizationProblem& prob, const double* x);
+/// Collective: evaluate_ml_cost(prob, x), and into g the owned rows of
+/// relaxed_gradient (relaxed) or ml_gradient, the same bits, in one pass over
+/// the edges (the solver's gradient stopping test).
+double ml_cost_and_gradient(const LocalizationProblem& prob, const double* x, double* g, bool relaxed);
 
 struct ErrorMetrics {
   bool valid = false;  ///< truth present

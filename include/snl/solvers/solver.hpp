@@ -66,8 +66,8 @@ struct SolverOptions {
   /// (the relaxation's grad f_hat at the extrapolated point). 0 disables it.
   double grad_tol = 0.0;
   /// Record history (and report progress) every this many iterations; 0: auto
-  /// (every iteration up to 2000, else about 1000 records per phase; at least
-  /// every 10 iterations above 100,000 sensors).
+  /// (every iteration up to 2000, else about 1000 records per phase; above
+  /// 100,000 sensors at least every 100 iterations, at gradient tests).
   std::int64_t history_every = 0;
   /// Consensus rounds per BB iteration (Calafiore et al. use 20).
   int bb_rounds = 20;
@@ -131,6 +131,9 @@ struct Summary {
   /// Time inside Algorithm::iterate() only (no history metrics, reductions or
   /// checkpoints), max over ranks; and the halo wait within it, max over ranks.
   double iterate_seconds = 0, iterate_wait_seconds = 0;
+  /// Bookkeeping outside iterate(), max over ranks: the stopping sums and
+  /// tests of every pass, and the records (history metrics, callbacks).
+  double stop_test_seconds = 0, record_seconds = 0;
   /// Per phase (pipeline: relaxation then mm), same meaning as iterate_seconds.
   std::vector<std::pair<std::string, double>> phase_iterate_seconds;
   /// Algorithm state (iterates, edge variables), all ranks; max over phases.

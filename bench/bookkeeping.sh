@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Share of `snl solve` (default options but --max-iter) spent outside the
+# iteration kernels: history records, stopping sums and tests, exact sums.
+#   NET=net.h5 NP=2 ITERS=300 BINS="/path/old/snl build/bin/snl" bench/bookkeeping.sh
+# One solve per binary, in the order given, each under the shared bench lock;
+# prints the load average before and after each, and per run: iterations,
+# solve_seconds, iterate_seconds, the fraction outside 1 - iterate / solve,
+# stop_test_seconds and record_seconds (where the binary reports them), RMSE,
+# and whether the positions equal the first binary's, byte for byte.
+set -euo pipefail
+NET=${NET:?NET=network.h5}
+NP=${NP:-2}
+ITERS=${ITERS:-300}
+BINS=${BINS:-build/bin/snl}
+WORK=${WORK:-/tmp/snl-bookkeeping}
+mkdir -p "$WORK"
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
+i=0
+first=""
+for b in $BINS; do
+  i=$((i + 1))
+  echo "# run $i: $(date -u +%FT%TZ) load $(cut -d' ' -f1-3 /proc/loadavg): mpirun -np $NP $b solve $NET -o $WORK/r$i.h5 --max-iter $ITERS --json $WORK/r$i.json -q"
+  flock /work/wt/bench.lock mpirun -np "$NP" "$b" solve "$NET" -o "$WORK/r$i.h5" --max-iter "$ITERS" --json "$WORK/r$i.json" -q
+  echo "# run $i ended: $(date -u +%FT%TZ) load $(cut -d' ' -f1-3 /proc/loadavg)"
+  [ -n "$first" ] || first="$WORK/r$i.h5"
+  /usr/bin/python3 - "$WORK/r$i.json" "$WORK/r$i.h5" "$first" <<'PY'
+import json, sys, h5py
+d = json.load(open(sys.argv[1]))
+same = h5py.File(sys.argv[2], "r")["positions"][()].tobytes() == h5py.File(sys.argv[3], "r")["positions"][()].tobytes()
+s, it = d["solve_seconds"], d["iterate_seconds"]
+print(f"iterations {d['iterations']} solve_s {s:.2f} iterate_s {it:.2f} outside {1 - it / s:.3f} "
+      f"stop_test_s {d.get('stop_test_seconds', 'n/a')} record_s {d.get('record_seconds', 'n/a')} "
+      f"rmse {d.get('rmse')} ml_cost {d['ml_cost']!r} positions_equal_first {same}")
+PY
+done
