@@ -99,7 +99,7 @@ void add_solve(CLI::App& app, Commands& c) {
                 "stopping rule with --tol: papers (relative change of x) or gradient (relative gradient of the "
                 "phase's cost; docs/quality.md)")
       ->capture_default_str();
-  s->add_option("--refine", c.solve.solver.refine, "the pipeline's refinement: mm|mm-accel|auto (mm-accel for the plain model, mm under --weights/--loss)")->capture_default_str();
+  s->add_option("--refine", c.solve.solver.refine, "the pipeline's refinement: auto|mm-accel|mm (auto: mm-accel for the plain model, mm under --weights/--loss)")->capture_default_str();
   s->add_option("--grad-tol", c.solve.solver.grad_tol,
                 "gradient norm tolerance (0: off; " + honoured_by(&Info::gradient_stop) + ")")
       ->capture_default_str();

@@ -45,14 +45,22 @@ const KernelTable* simd_table(int lanes) {
   return nullptr;
 }
 
-// Chunks [c0, c1) of one part: the full ones through the SIMD kernel of the
-// layout's lane width where the CPU allows it, the rest (the part's partial
-// last chunk; everything without SIMD) through the scalar twin. Fn is
-// KernelTable::relax or KernelTable::mm.
+// Chunks [c0, c1): the full ones through the SIMD kernel of the layout's lane
+// width where the CPU allows it, the rest (each part's partial last chunk;
+// everything without SIMD) through the scalar twin. Fn is KernelTable::relax
+// or KernelTable::mm. A range over both parts is run part by part: the
+// interior's last chunk may be partial, and a SIMD pass over it would step
+// the next nodes too (their anchor variables a second time, as the extra
+// lanes read the rows that follow).
 template <auto Fn, class Step>
 void run_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
                 const Step& s) {
   if (c0 >= c1) return;
+  if (c0 < nl.split && nl.split < c1) {
+    run_chunks<Fn>(prob, nl, c0, nl.split, s);
+    run_chunks<Fn>(prob, nl, nl.split, c1, s);
+    return;
+  }
   if (prob.dim() == 1) {  // p = 1: the scalar twin only (simd_common.hpp)
     if constexpr (std::is_same_v<Step, RelaxStep>)
       kScalarRelax1(prob, nl, c0, c1, s);

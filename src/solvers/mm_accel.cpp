@@ -6,18 +6,24 @@
 // R^{np} and the range spheres. Its accelerated form extrapolates z:
 //   v = z(k) + beta_t (z(k) - z(k-1)),  z+ = P_C(v - grad F(v) / L),
 // beta_t = t / (t + 3), t the steps accepted since the last restart (the
-// (k-1)/(k+2) sequence of Nesterov's method). z+ is accepted when F(z+) <=
-// F(z(k)); otherwise it is discarded, t = 0, and the next iteration is a plain
-// MM step from z(k), which 000's majorization argument makes monotone (a
-// projected gradient step with step 1/L, L >= the Lipschitz constant of grad F,
-// from a feasible point never raises F). This is the function-value restart of
-// O'Donoghue & Candes (Found. Comput. Math. 2015) made monotone as in Beck &
-// Teboulle's MFISTA (IEEE TIP 2009) and Li & Lin's monotone APG for nonconvex
-// problems (NeurIPS 2015): F never increases, and f(x) <= F(z) throughout.
+// (k-1)/(k+2) sequence of Nesterov's method). z+ is accepted when neither F
+// nor the ML cost f rises: F(z+) <= F(z(k)) and f(x+) <= f(x(k)). Otherwise
+// it is discarded, t = 0, the edge and anchor variables are reset to their
+// best values for x(k) (y_e = P_sphere(d_e)(x_i - x_j), w likewise, where
+// F(x(k), y, w) = f(x(k))), and the next iteration is a plain MM step from
+// there, which 000's majorization argument makes monotone in both (a
+// projected gradient step with step 1/L, L >= the Lipschitz constant of grad
+// F, from a feasible point never raises F, and f(x+) <= F(z+) <= F(x(k), y,
+// w) = f(x(k))). This is the function-value restart of O'Donoghue & Candes
+// (Found. Comput. Math. 2015) made monotone as in Beck & Teboulle's MFISTA
+// (IEEE TIP 2009) and Li & Lin's monotone APG for nonconvex problems (NeurIPS
+// 2015): neither F nor f ever increases, and f(x) <= F(z) throughout. (With
+// the test on F alone, f rose at some iterations on 8 of 50 small random
+// networks.)
 //
 // One iteration is one kernel pass and one halo exchange (the new x rows),
 // so one message per sensor as for MM; a rejected iteration counts as one.
-// F is summed exactly (detail::ExactSum) and the extrapolation is the same
+// F and f are summed exactly (detail::ExactSum) and the extrapolation is the same
 // arithmetic on every copy of a row or edge variable, so the iterates are
 // bit-identical for any number of ranks. Parameter-free: L is MM's (eq. 9).
 #include <algorithm>
@@ -50,16 +56,13 @@ class MMAccel final : public Algorithm {
     x_[kPrev] = x_[kCur];
     lanes_.build(prob_);
     norms_.assign(2 * detail::kMaxLanes, 0.0);
-    if (prob_.dim() == 1)
-      init<1>();
-    else if (prob_.dim() == 2)
-      init<2>();
-    else
-      init<3>();
+    for (auto& b : y_) b.assign(std::size_t(lanes_.groups()) * lanes_.lanes * prob_.dim(), 0.0);
+    for (auto& b : w_) b.assign(prob_.anchor_ranges().size() * prob_.dim(), 0.0);
+    init_for_dim();
     y_[kPrev] = y_[kCur];
     w_[kPrev] = w_[kCur];
     t_ = 0;
-    F_ = surrogate(kCur);
+    set_costs(surrogate(kCur));
   }
 
   // Extrapolate, one MM step from there, exchange the new rows, accept or reject.
@@ -70,10 +73,9 @@ class MMAccel final : public Algorithm {
                             norms_.data(), false};
     std::fill(norms_.begin(), norms_.end(), 0.0);
     detail::mm_chunks(prob_, lanes_, 0, lanes_.size(), st);
-    const double F = surrogate(kOut);  // exchanges the new rows (the iteration's message)
-    if (beta > 0 && !(F <= F_)) {      // F would rise: keep z(k), restart the momentum
-      t_ = 0;
-      ++restarts_;
+    const Costs c = surrogate(kOut);  // exchanges the new rows (the iteration's message)
+    if (beta > 0 && !(c.F <= F_ && c.f <= f_)) {  // F or f would rise: keep x(k), restart
+      restart();
       return;
     }
     std::swap(x_[kPrev], x_[kCur]);
@@ -82,7 +84,7 @@ class MMAccel final : public Algorithm {
     std::swap(y_[kCur], y_[kWork]);
     std::swap(w_[kPrev], w_[kCur]);
     std::swap(w_[kCur], w_[kWork]);
-    F_ = F;
+    set_costs(c);
     ++t_;
   }
 
@@ -121,10 +123,32 @@ class MMAccel final : public Algorithm {
     r.anchor_rows("w", w_[kCur].data(), p);
     r.anchor_rows("w_prev", w_[kPrev].data(), p);
     prob_.graph().halo().exchange(x_[kPrev].data(), p);
-    F_ = surrogate(kCur);  // exchanges x's ghost rows; F is a function of z(k)
+    set_costs(surrogate(kCur));  // exchanges x's ghost rows; F and f are functions of z(k)
   }
 
  private:
+  struct Costs {
+    double F, f;  // the surrogate F(z), the ML cost f(x)
+  };
+  void set_costs(const Costs& c) {
+    F_ = c.F;
+    f_ = c.f;
+  }
+
+  // The momentum restart: t = 0 and (y, w) of z(k) reset to their best values
+  // for x(k) (x(k)'s ghost rows are those exchanged when it was computed), so
+  // that the next, plain, step lowers f as well as F. F is summed again (one
+  // reduction, no halo message).
+  void restart() {
+    t_ = 0;
+    ++restarts_;
+    init_for_dim();
+    detail::ExactSum sums[2];
+    add_surrogate_terms(kCur, 0, lanes_.size(), sums);
+    detail::allreduce_exact(sums, 2, prob_.comm());
+    set_costs({sums[0].value(), sums[1].value()});
+  }
+
   enum { kCur = 0, kPrev = 1, kOut = 2, kWork = 2, kV = 3 };  // x_: 4 buffers; y_, w_: 3
 
   // The extrapolated point into the work buffers: y and w always (the kernel
@@ -151,14 +175,23 @@ class MMAccel final : public Algorithm {
   }
 
   // y_e = P_sphere(d_e)(x_i - x_j), w_ik = P_sphere(r_ik)(x_i - a_k) (as MM).
+  // Into y_[kCur] and w_[kCur] (allocated by start()).
+  // (y, w) at their best values for x_[kCur], in the dimension's template.
+  void init_for_dim() {
+    if (prob_.dim() == 1)
+      init<1>();
+    else if (prob_.dim() == 2)
+      init<2>();
+    else
+      init<3>();
+  }
   template <int P>
   void init() {
     const auto& gr = prob_.graph();
     const auto& off = gr.offsets();
     const auto& adj = gr.adjacency();
     const auto& x = x_[kCur];
-    for (auto& b : y_) b.assign(std::size_t(lanes_.groups()) * lanes_.lanes * P, 0.0);
-    for (auto& b : w_) b.assign(prob_.anchor_ranges().size() * P, 0.0);
+
     for (LocalId v = 0; v < gr.num_owned(); ++v) {
       for (auto e = off[v]; e < off[v + 1]; ++e) {
         const bool fwd = gr.global_id(v) < gr.global_id(adj[e]);
@@ -178,19 +211,20 @@ class MMAccel final : public Algorithm {
     }
   }
 
-  // Collective: F at (x_[b], y_[b], w_[b]) (000, eq. 2), after exchanging
-  // x_[b]'s ghost rows; the interior chunks' terms overlap the exchange.
-  double surrogate(int b) {
+  // Collective: F at (x_[b], y_[b], w_[b]) (000, eq. 2) and f at x_[b] (the
+  // ML cost, the same terms as evaluate_costs), after exchanging x_[b]'s
+  // ghost rows; the interior chunks' terms overlap the exchange.
+  Costs surrogate(int b) {
     HaloPlan& halo = prob_.graph().halo();
-    detail::ExactSum F;  // exact: the same F, and so the same decisions, for any partition
+    detail::ExactSum sums[2];  // exact: the same F and f, and so the same decisions, for any partition
     halo.begin(x_[b].data(), prob_.dim());
-    add_surrogate_terms(b, 0, lanes_.split, F);
+    add_surrogate_terms(b, 0, lanes_.split, sums);
     halo.end(x_[b].data(), prob_.dim());
-    add_surrogate_terms(b, lanes_.split, lanes_.size(), F);
-    detail::allreduce_exact(&F, 1, prob_.comm());
-    return F.value();
+    add_surrogate_terms(b, lanes_.split, lanes_.size(), sums);
+    detail::allreduce_exact(sums, 2, prob_.comm());
+    return {sums[0].value(), sums[1].value()};
   }
-  void add_surrogate_terms(int b, std::int64_t c0, std::int64_t c1, detail::ExactSum& F) const {
+  void add_surrogate_terms(int b, std::int64_t c0, std::int64_t c1, detail::ExactSum* F) const {
     if (prob_.dim() == 1)
       add_terms<1>(b, c0, c1, F);
     else if (prob_.dim() == 2)
@@ -201,8 +235,9 @@ class MMAccel final : public Algorithm {
   // Chunks [c0, c1) of the lane layout: each sensor edge at the slot oriented
   // (owner, neighbour) in global-id order (so once over all ranks), then the
   // chunk's anchor edges.
+  // F[0] gets F's terms, F[1] f's: 0.5 (|x_i - x_j| - d_e)^2 per edge.
   template <int P>
-  void add_terms(int b, std::int64_t c0, std::int64_t c1, detail::ExactSum& F) const {
+  void add_terms(int b, std::int64_t c0, std::int64_t c1, detail::ExactSum* F) const {
     const int C = lanes_.lanes;
     const auto& aoff = prob_.anchor_offsets();
     const double* x = x_[b].data();
@@ -216,23 +251,29 @@ class MMAccel final : public Algorithm {
           const int q = detail::NodeLanes::lane_node(L, C);
           const double* xv = x + std::size_t(lanes_.first[c] + q) * P;
           const double* xu = x + std::size_t(lanes_.adj[g * C + q]) * P;
-          double s = 0;
+          double s = 0, z2 = 0;
           for (int k = 0; k < P; ++k) {
-            const double r = xv[k] - xu[k] - y[std::size_t(g * P + k) * C + L];
+            const double z = xv[k] - xu[k], r = z - y[std::size_t(g * P + k) * C + L];
             s += r * r;
+            z2 += z * z;
           }
-          F.add(0.5 * s);
+          const double m = std::sqrt(z2) - lanes_.rho[g * C + L];
+          F[0].add(0.5 * s);
+          F[1].add(0.5 * m * m);
         }
       }
       for (LocalId v = lanes_.first[c]; v < lanes_.first[c] + lanes_.count[c]; ++v)
         for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
           const double* a = &prob_.anchors()[std::size_t(prob_.anchor_ids()[e]) * P];
-          double s = 0;
+          double s = 0, z2 = 0;
           for (int k = 0; k < P; ++k) {
-            const double r = x[std::size_t(v) * P + k] - a[k] - w[std::size_t(e) * P + k];
+            const double z = x[std::size_t(v) * P + k] - a[k], r = z - w[std::size_t(e) * P + k];
             s += r * r;
+            z2 += z * z;
           }
-          F.add(0.5 * s);
+          const double m = std::sqrt(z2) - prob_.anchor_ranges()[e];
+          F[0].add(0.5 * s);
+          F[1].add(0.5 * m * m);
         }
     }
   }
@@ -246,6 +287,7 @@ class MMAccel final : public Algorithm {
   std::int64_t t_ = 0;         // steps accepted since the last restart
   std::int64_t restarts_ = 0;
   double F_ = 0;               // F(z(k))
+  double f_ = 0;               // f(x(k))
 };
 
 }  // namespace

@@ -4,10 +4,12 @@
 # on disk, repeat; the final positions equal the uninterrupted run bit for bit,
 # and the log shows that the restarts resumed from checkpoints (iteration > 0),
 # not from scratch. A second case kills the pipeline once its checkpoint is in
-# the MM phase and checks that the restart resumes inside MM.
+# the refinement phase (the default, mm-accel) and checks that the restart
+# resumes inside it.
 source "$(dirname "$0")/common.bash"
 "$SNL" generate -o "$T/net.h5" --sensors 3000 --avg-degree 7 --sigma 0.05 --anchors corners --side 1 --seed 5 -q 2> /dev/null
 ARGS=(--algorithm pipeline --max-iter 3000 --tol 0)
+REF=mm-accel  # the pipeline's default refinement on this network (no sigmas, l2)
 mpi 2 "$SNL" solve "$T/net.h5" -o "$T/ref.h5" "${ARGS[@]}" -q
 export SNL_TEST_CHECKPOINT_DELAY=0.15
 # start_run LOG [extra...]: a 2-rank run in its own process group, resuming from ck.h5 if there is one.
@@ -57,25 +59,25 @@ done
 h5diff "$T/ref.h5" "$T/out.h5" /positions || fail "result after $kills kills differs from the uninterrupted run"
 echo "kill_restart: $kills kills, $resumes resumes, result identical"
 
-# Kill inside the pipeline's MM phase: wait for a checkpoint whose phase is mm.
+# Kill inside the pipeline's refinement: wait for a checkpoint whose phase is $REF.
 rm -f "$T/ck.h5" "$T/out.h5"
 start_run "$T/log.mm1"
 phase=""
 for _ in $(seq 1200); do
   kill -0 $pid 2>/dev/null || break
   [ -f "$T/ck.h5" ] && phase=$(h5dump -a /phase_algorithm "$T/ck.h5" 2>/dev/null | sed -n 's/.*(0): "\(.*\)".*/\1/p')
-  [ "$phase" = mm ] && break
+  [ "$phase" = $REF ] && break
   sleep 0.05
 done
-[ "$phase" = mm ] || fail "no MM checkpoint seen (phase '$phase')"
-kill -0 $pid 2>/dev/null || fail "the run ended before it could be killed in MM"
+[ "$phase" = $REF ] || fail "no $REF checkpoint seen (phase '$phase')"
+kill -0 $pid 2>/dev/null || fail "the run ended before it could be killed in $REF"
 kill_run
 [ -f "$T/out.h5" ] && fail "a killed run wrote its result"
 unset SNL_TEST_CHECKPOINT_DELAY
 start_run "$T/log.mm2"
-wait $pid || { cat "$T/log.mm2"; fail "the restart in MM failed"; }
-grep -Eq "^snl solve: resuming from .* at mm iteration [1-9][0-9]* \(total iteration [0-9]+\)$" "$T/log.mm2" ||
-  { cat "$T/log.mm2"; fail "the restart did not resume inside MM"; }
+wait $pid || { cat "$T/log.mm2"; fail "the restart in $REF failed"; }
+grep -Eq "^snl solve: resuming from .* at $REF iteration [1-9][0-9]* \(total iteration [0-9]+\)$" "$T/log.mm2" ||
+  { cat "$T/log.mm2"; fail "the restart did not resume inside $REF"; }
 grep -q "^relaxation " "$T/log.mm2" && fail "the restart ran relaxation iterations again"
-h5diff "$T/ref.h5" "$T/out.h5" /positions || fail "result after a kill in MM differs from the uninterrupted run"
-echo "kill_restart: killed and resumed inside MM ($(grep '^snl solve: resuming' "$T/log.mm2")), result identical"
+h5diff "$T/ref.h5" "$T/out.h5" /positions || fail "result after a kill in $REF differs from the uninterrupted run"
+echo "kill_restart: killed and resumed inside $REF ($(grep '^snl solve: resuming' "$T/log.mm2")), result identical"

@@ -56,7 +56,7 @@ ls "$O"/*.json > /dev/null || fail "no JSON output was written"
 # The same runs say early when they cannot succeed, with the numbers and the remedy.
 grep -q "warning: most sensors (30 of 30) cannot be localized.*--avg-degree" "$O/solve_bad_pipeline.err" \
   || fail "solve on a network with no localizable sensor did not warn before iterating"
-grep -q "the mm phase stopped at --max-iter 30 before its stopping rule (--stop gradient, --tol 1e-05) was met.*raise --max-iter" \
+grep -q "the mm-accel phase stopped at --max-iter 30 before its stopping rule (--stop gradient, --tol 1e-05) was met.*raise --max-iter" \
   "$O/solve_good_pipeline.err" || fail "solve stopped by --max-iter did not say how far from --tol"
 ! grep -q "most sensors" "$O/solve_good_pipeline.err" || fail "solve warned on a localizable network"
 grep -q "warning: .*30 of 30 sensors (100%) cannot be localized" "$O/gen_bad.err" \

@@ -49,10 +49,10 @@ struct SolverOptions {
   ///             stop_interval() iterations.
   std::string stop = "gradient";
   /// The refinement the pipeline runs after the relaxation: mm | mm-accel, or
-  /// auto: mm-accel under the plain l2 unweighted model, mm when weights or a
-  /// robust loss are in effect (mm-accel does not honour them). The Solver
-  /// resolves auto once it knows whether the network has sigmas.
-  std::string refine = "mm";
+  /// auto (the default): mm-accel under the plain l2 unweighted model, mm when
+  /// weights or a robust loss are in effect (mm-accel does not honour them).
+  /// The Solver resolves auto once it knows whether the network has sigmas.
+  std::string refine = "auto";
   /// `refine` with auto resolved for a model that is (or is not) weighted/robust.
   std::string resolved_refine(bool model_in_effect) const {
     return refine != "auto" ? refine : (model_in_effect ? "mm" : "mm-accel");
