@@ -26,7 +26,7 @@ import csv, math, sys
 import h5py
 rows = list(csv.DictReader(open(sys.argv[1])))
 traj = list(csv.DictReader(open(sys.argv[2])))
-cols = "sigma,trial,algorithm,iterations,messages_per_sensor,reals_per_sensor,ml_cost_start,ml_cost,rmse,mpe".split(",")
+cols = "sigma,trial,algorithm,iterations,messages_per_sensor,reals_per_sensor,ml_cost_start,ml_cost,rmse,mpe,fhat,objective".split(",")
 errors = []
 def check(cond, msg):
     if not cond: errors.append(msg)
@@ -48,6 +48,10 @@ for r in rows:
     check(0 < reals <= budget, "reals %s over the budget" % r)
     check(reals == k * per_iter, "reals %s != %d iterations x %d" % (r, k, per_iter))
     check(r["ml_cost_start"] == start[(r["sigma"], r["trial"])]["ml_cost"], "start cost %s" % r)
+for r in rows:  # f_hat underestimates f; the relaxation's own objective is f_hat
+    check(float(r["fhat"]) <= float(r["ml_cost"]) * (1 + 1e-12), "fhat above the ML cost %s" % r)
+    if r["algorithm"] == "relaxation":
+        check(r["fhat"] == r["objective"], "relaxation objective is not fhat %s" % r)
     run = [t for t in traj if (t["sigma"], t["trial"], t["algorithm"]) == (r["sigma"], r["trial"], r["algorithm"])]
     check(len(run) >= 2, "no trajectory for %s" % r)
     x = [float(t["reals_per_sensor"]) for t in run]
