@@ -104,10 +104,6 @@ void run_method(const ExperimentCommand& cmd, LocalizationProblem& prob, std::si
   const double per_it = info.consensus_rounds ? prob.dim() + 2.0 * cmd.bb_rounds : prob.dim() + (info.admm ? 1.0 : 0.0);
   o.max_iter = static_cast<std::int64_t>(std::floor(cmd.budget / per_it));
   o.history_every = std::max<std::int64_t>(1, o.max_iter / std::max<std::int64_t>(1, cmd.points));
-  if (info.one_shot) {  // a centralized SDP (the oracle beside esdp-dist): its own rule, no budget
-    o.tol = SolverOptions().tol;
-    o.max_iter = SolverOptions().max_iter;
-  }
   std::vector<double> x;
   Summary s = Solver(prob, o).solve(xr, &x);
   const double start_ml = cmd.start == "relaxation" ? ml_start : s.history.front().ml_cost;
