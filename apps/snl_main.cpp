@@ -114,6 +114,8 @@ void add_solve(CLI::App& app, Commands& c) {
   s->add_option("--bb-rounds", c.solve.solver.bb_rounds,
                 "consensus rounds per BB iteration (" + honoured_by(&Info::consensus_rounds) + ")")
       ->capture_default_str();
+  s->add_option("--esdp-rho", c.solve.solver.esdp_rho, "ADMM penalty (" + honoured_by(&Info::admm) + ")")
+      ->capture_default_str();
   s->add_option("--temporal-block", c.solve.solver.temporal_block,
                 "iterations per pass over memory (same iterates; tests and records at pass ends; " +
                     honoured_by(&Info::temporal_blocking) + ")")

@@ -332,6 +332,7 @@ std::string checkpoint_options(const SolverOptions& opt) {
   if (seed_drives_iterates(opt.algorithm)) os << "|seed=" << opt.seed;
   if (opt.weights != "auto") os << "|weights=" << opt.weights;
   if (opt.loss != "l2") os << "|loss=" << opt.loss;
+  if (opt.esdp_rho != 1.0) os << "|esdp_rho=" << opt.esdp_rho;
   if (opt.stop != "papers") os << "|stop=" << opt.stop;
   if (opt.algorithm == "pipeline" && opt.refine != "mm") os << "|refine=" << opt.refine;
   return os.str();

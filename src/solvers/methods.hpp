@@ -21,6 +21,7 @@ std::unique_ptr<Algorithm> make_model_mm(LocalizationProblem& prob);
 std::unique_ptr<Algorithm> make_bb_calafiore(LocalizationProblem& prob, const SolverOptions& opt);  // bb_calafiore.cpp
 std::unique_ptr<Algorithm> make_sdp(LocalizationProblem& prob, const SolverOptions& opt);   // centralized/centralized.cpp
 std::unique_ptr<Algorithm> make_esdp(LocalizationProblem& prob, const SolverOptions& opt);  // centralized/centralized.cpp
+std::unique_ptr<Algorithm> make_esdp_dist(LocalizationProblem& prob, const SolverOptions& opt);  // esdp_dist.cpp
 std::unique_ptr<Algorithm> make_edm(LocalizationProblem& prob, const SolverOptions& opt);   // centralized/centralized.cpp
 
 }  // namespace snl::detail

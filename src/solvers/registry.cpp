@@ -44,6 +44,9 @@ const std::vector<AlgorithmInfo> kRegistry = {
      true, false, false, false, false, false, false, true},
     {A::kEdm, "edm", 11, detail::make_edm, {A::kEdm},
      true, false, false, false, false, false, false, true},
+    // The same ESDP solved by distributed ADMM (esdp_dist.cpp): 003's Fig. 6 comparison.
+    {A::kEsdpDist, "esdp-dist", 12, detail::make_esdp_dist, {A::kEsdpDist},
+     true, false, false, false, false, false, false, false, true},
 };
 
 }  // namespace

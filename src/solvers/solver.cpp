@@ -30,6 +30,7 @@ std::string SolverOptions::validate() const {
   if (!(grad_tol >= 0) || !std::isfinite(grad_tol)) return "--grad-tol must be a finite number >= 0";
   if (history_every < 0) return "--history-every must be >= 0";
   if (bb_rounds < 1 || bb_rounds > 10000) return "--bb-rounds must be in [1, 10000]";
+  if (!(esdp_rho > 0) || !std::isfinite(esdp_rho)) return "--esdp-rho must be a finite number > 0";
   if (temporal_block < 1 || temporal_block > 64) return "--temporal-block must be in [1, 64]";
   try {
     parse_weights_spec(weights);
@@ -79,12 +80,16 @@ std::string SolverOptions::unsupported_option() const {
       {bb_rounds != defaults.bb_rounds, "--bb-rounds", &AlgorithmInfo::consensus_rounds, "20"},
       {weights != defaults.weights && weights != "none", "--weights", &AlgorithmInfo::measurement_model, "none"},
       {loss != defaults.loss, "--loss", &AlgorithmInfo::measurement_model, "l2"},
+      {esdp_rho != defaults.esdp_rho, "--esdp-rho", &AlgorithmInfo::admm, "1"},
   };
   // tol's default is NaN (the stopping rule's own default): "given" means not NaN.
   const bool tol_given = !std::isnan(tol);
   if (a->one_shot && (tol_given || max_iter != defaults.max_iter))
     return std::string(tol_given ? "--tol" : "--max-iter") + " is not honoured by --algorithm " +
            algorithm + " (a convex relaxation solved once by an SDP solver, to its own tolerance); leave it out";
+  // ADMM's iterate is no minimizer of f or f_hat: the gradient rule would test the wrong cost.
+  if (a->admm && stop == "gradient" && stop_tol() > 0)
+    return "--algorithm " + algorithm + " stops only by the relative improvement: give --stop papers";
   for (const auto& c : checks)
     if (c.set && !(c.capability == &AlgorithmInfo::measurement_model ? honours_model(*a, *this) : a->*c.capability))
       return std::string(c.option) + " is not honoured by --algorithm " + algorithm + " (only by " +

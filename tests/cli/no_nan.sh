@@ -30,6 +30,7 @@ for net in good bad notruth; do
     launch=("$SNL"); [ "$alg" = pipeline ] && launch=(mpi 2 "$SNL")  # one MPI run; singletons are quicker
     iters=(--max-iter 30)
     case $alg in sdp|esdp|edm) iters=() ;; esac  # solved once: --max-iter is refused
+    case $alg in esdp-dist) iters+=(--stop papers) ;; esac  # ADMM: only the relative-improvement rule
     if [ ${#iters[@]} -eq 0 ] && [ $net != good ]; then
       # No anchor measurement: the SDP relaxations refuse it (exit 4); their message must still be clean.
       set +e; "${launch[@]}" solve "$T/$net.h5" -o "$T/r_${net}_$alg.h5" --algorithm "$alg" --progress-seconds 0 \

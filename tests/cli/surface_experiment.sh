@@ -26,7 +26,7 @@ import csv, math, sys
 import h5py
 rows = list(csv.DictReader(open(sys.argv[1])))
 traj = list(csv.DictReader(open(sys.argv[2])))
-cols = "sigma,trial,algorithm,iterations,messages_per_sensor,reals_per_sensor,ml_cost_start,ml_cost,rmse,mpe".split(",")
+cols = "sigma,trial,algorithm,iterations,messages_per_sensor,reals_per_sensor,ml_cost_start,ml_cost,rmse,mpe,fhat,objective".split(",")
 errors = []
 def check(cond, msg):
     if not cond: errors.append(msg)
@@ -55,13 +55,17 @@ for r in rows:
     check(x[-1] == reals, "trajectory ends at %s, row says %s" % (x[-1], reals))
     check(run[0]["ml_cost"] == r["ml_cost_start"] and run[-1]["ml_cost"] == r["ml_cost"], "trajectory costs %s" % r)
     check(all(math.isfinite(float(t["ml_cost"])) for t in run), "non-finite trajectory cost")
+for r in rows:  # f_hat underestimates f; the relaxation's own objective is f_hat
+    check(float(r["fhat"]) <= float(r["ml_cost"]) * (1 + 1e-12), "fhat above the ML cost %s" % r)
+    if r["algorithm"] == "relaxation":
+        check(r["fhat"] == r["objective"], "relaxation objective is not fhat %s" % r)
 check(len(traj) == sum(1 for t in traj if (t["sigma"], t["trial"], t["algorithm"]) in
       {(s, str(t_), a) for s, t_, a in keys if a != "relaxation"}), "trajectory of a run not in the table")
 rmse = {s: sum(float(r["rmse"]) for r in rows if r["sigma"] == s and r["algorithm"] == "relaxation") / trials
         for s in sigmas}
 check(rmse["0.002"] < 0.5 * rmse["0.3"], "relaxation RMSE %s" % rmse)
 h = h5py.File(sys.argv[3], "r")
-for c in ["sigma", "trial", "iterations", "reals_per_sensor", "ml_cost", "rmse", "mpe"]:
+for c in ["sigma", "trial", "iterations", "reals_per_sensor", "ml_cost", "rmse", "mpe", "fhat", "objective"]:
     check(len(h[c]) == len(rows) and all(abs(a - float(r[c])) <= 1e-8 * max(1, abs(a)) for a, r in zip(h[c][:], rows)),
           "--h5 column " + c)  # the CSV has 10 significant digits
 code = {"relaxation": 0, "mm": 1, "bb": 2}

@@ -13,7 +13,7 @@ class Algorithm;
 class LocalizationProblem;
 struct SolverOptions;
 
-enum class AlgorithmId { kRelaxation, kMM, kPipeline, kBB, kPM, kAsync, kAsyncExact, kMMAccel, kSdp, kEsdp, kEdm, kBBCalafiore };
+enum class AlgorithmId { kRelaxation, kMM, kPipeline, kBB, kPM, kAsync, kAsyncExact, kMMAccel, kSdp, kEsdp, kEdm, kBBCalafiore, kEsdpDist };
 
 struct AlgorithmInfo {
   AlgorithmId id;
@@ -36,6 +36,8 @@ struct AlgorithmInfo {
   /// Solved in one step (the centralized SDP relaxations): the Solver stops after
   /// its first iteration; --tol, --max-iter, --init FILE and checkpoints are refused.
   bool one_shot = false;
+  /// An ADMM method: honours --esdp-rho (its penalty) and stops only by --stop papers.
+  bool admm = false;
 };
 
 /// Every method, in the order of the CLI help.
@@ -53,7 +55,7 @@ std::string algorithm_names(const std::string& sep, const std::string& last_sep 
 std::string algorithms_with(bool AlgorithmInfo::*capability);
 
 /// Numeric codes of the algorithms in history/checkpoint/experiment files:
-/// 0=relaxation 1=mm 2=bb 3=pm 4=async 5=async-exact 6=mm-accel 7=sdp 8=esdp 10=bb-calafiore 11=edm
+/// 0=relaxation 1=mm 2=bb 3=pm 4=async 5=async-exact 6=mm-accel 7=sdp 8=esdp 10=bb-calafiore 11=edm 12=esdp-dist
 /// (9 for anything else).
 int algorithm_code(const std::string& name);
 const char* algorithm_name(int code);  ///< inverse of algorithm_code ("?" if unknown)

@@ -71,6 +71,8 @@ struct SolverOptions {
   std::int64_t history_every = 0;
   /// Consensus rounds per BB iteration (Calafiore et al. use 20).
   int bb_rounds = 20;
+  /// ADMM penalty of esdp-dist (docs/esdp-dist.md).
+  double esdp_rho = 1.0;
   /// Temporal blocking: up to this many relaxation or MM iterations per pass over memory
   /// (the same iterates, bit for bit, with far less memory traffic). The
   /// stopping tests, history records, callbacks, signals and checkpoints are
