@@ -95,10 +95,15 @@ void add_solve(CLI::App& app, Commands& c) {
   s->add_option("--max-iter", c.solve.solver.max_iter, "iterations per phase")->capture_default_str();
   s->add_option("--tol", c.solve.solver.tol,
                 "tolerance of --stop (0: run --max-iter iterations; default 1e-5 with gradient, 1e-6 with papers)");
-  s->add_option("--stop", c.solve.solver.stop,
-                "stopping rule with --tol: papers (relative change of x) or gradient (relative gradient of the "
-                "phase's cost; docs/quality.md)")
-      ->capture_default_str();
+  CLI::Option* stop = s->add_option("--stop", c.solve.solver.stop,
+                                     "stopping rule with --tol: papers (relative change of x) or gradient (relative "
+                                     "gradient of the phase's cost; docs/quality.md; esdp-dist: papers)")
+                           ->capture_default_str();
+  s->parse_complete_callback([&c, stop] {
+    // ADMM's iterate minimizes neither f nor f_hat: without --stop it takes the papers' rule.
+    const Info* a = snl::find_algorithm(c.solve.solver.algorithm);
+    if (!stop->count() && a && a->admm) c.solve.solver.stop = "papers";
+  });
   s->add_option("--refine", c.solve.solver.refine, "the pipeline's refinement: auto|mm-accel|mm (auto: mm-accel for the plain model, mm under --weights/--loss)")->capture_default_str();
   s->add_option("--grad-tol", c.solve.solver.grad_tol,
                 "gradient norm tolerance (0: off; " + honoured_by(&Info::gradient_stop) + ")")

@@ -52,7 +52,11 @@ refuse() {  # refuse STATUS MESSAGE ARGS...: 2 for an option the method cannot h
     [ ! -e "$T/x.json" ] || fail "$*: JSON written"
   done
 }
-refuse 2 "give --stop papers" --algorithm esdp-dist
+refuse 2 "give --stop papers" --algorithm esdp-dist --stop gradient
+# Without --stop it takes the papers' rule: the bits of --stop papers.
+mpi 2 "$SNL" solve "$NET" -o "$T/default.h5" --algorithm esdp-dist --max-iter 300 -q
+mpi 2 "$SNL" solve "$NET" -o "$T/papers.h5" --algorithm esdp-dist --max-iter 300 --stop papers -q
+h5diff -q "$T/default.h5" "$T/papers.h5" /positions || fail "esdp-dist without --stop is not --stop papers"
 refuse 1 "--esdp-rho must be a finite number > 0" --algorithm esdp-dist --stop papers --esdp-rho 0
 refuse 1 "--esdp-rho must be a finite number > 0" --algorithm esdp-dist --stop papers --esdp-rho nan
 refuse 2 "--esdp-rho is not honoured by --algorithm relaxation" --algorithm relaxation --esdp-rho 2
