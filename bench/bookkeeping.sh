@@ -13,6 +13,8 @@ NP=${NP:-2}
 ITERS=${ITERS:-300}
 BINS=${BINS:-build/bin/snl}
 WORK=${WORK:-/tmp/snl-bookkeeping}
+# Runs that time themselves wait for each other on a shared machine: LOCK names the lock file.
+LOCK=${LOCK:-$WORK/bench.lock}
 mkdir -p "$WORK"
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 i=0
@@ -20,7 +22,7 @@ first=""
 for b in $BINS; do
   i=$((i + 1))
   echo "# run $i: $(date -u +%FT%TZ) load $(cut -d' ' -f1-3 /proc/loadavg): mpirun -np $NP $b solve $NET -o $WORK/r$i.h5 --max-iter $ITERS --json $WORK/r$i.json -q"
-  flock /work/wt/bench.lock mpirun -np "$NP" "$b" solve "$NET" -o "$WORK/r$i.h5" --max-iter "$ITERS" --json "$WORK/r$i.json" -q
+  flock "$LOCK" mpirun -np "$NP" "$b" solve "$NET" -o "$WORK/r$i.h5" --max-iter "$ITERS" --json "$WORK/r$i.json" -q
   echo "# run $i ended: $(date -u +%FT%TZ) load $(cut -d' ' -f1-3 /proc/loadavg)"
   [ -n "$first" ] || first="$WORK/r$i.h5"
   /usr/bin/python3 - "$WORK/r$i.json" "$WORK/r$i.h5" "$first" <<'PY'

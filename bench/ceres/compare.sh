@@ -15,7 +15,7 @@
 #   SNL_TOL (1e-7, gradient rule), SNL_ITER (20000), MM_ITER (SNL_ITER; MM's cap), CERES_ITER (100),
 #   ALGS ("mm mm-accel": the snl refinements to run),
 #   CERES_TOL (1e-12: function, gradient and parameter tolerance), CRLB (1: `snl eval --crlb`
-#   on the network once), LOCK (/work/wt/bench.lock; every command runs under flock).
+#   on the network once), LOCK (a lock file, default WORK/bench.lock; every command runs under flock).
 set -euo pipefail
 {  # the whole script is parsed before it runs: editing it during a run is safe
 ROOT=$(cd "$(dirname "$0")/../.." && pwd)
@@ -30,7 +30,7 @@ MM_ITER=${MM_ITER:-$SNL_ITER}
 ALGS=${ALGS:-mm mm-accel}
 CERES_ITER=${CERES_ITER:-100} CERES_TOL=${CERES_TOL:-1e-12}
 CRLB=${CRLB:-1}
-LOCK=${LOCK:-/work/wt/bench.lock}
+LOCK=${LOCK:-$WORK/bench.lock}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 for f in "$SNL" "$CERES"; do [ -x "$f" ] || { echo "missing $f (build with -DSNL_BUILD_CERES=ON)" >&2; exit 1; }; done
 RUN=()
