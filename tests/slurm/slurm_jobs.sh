@@ -110,7 +110,7 @@ step "c) experiment_array.sbatch: 3 tasks == direct runs with their seeds; merge
 # the batch shell 5-35 s into every run: a solve that needs about WORK_SECONDS
 # (default 50; sized by a short calibration run) is always stopped at least
 # once. Should the machine speed up enough for the job to end unsignalled, the
-# run is repeated once with twice the work.
+# run is repeated once with the work sized by that job's own time.
 WORK=${WORK_SECONDS:-50}
 mpirun -np 2 "$SNL" solve "$NET" -o cal.h5 --algorithm pipeline --max-iter 10000 --tol 0 --json cal.json -q
 cal=$($PY -c "import json; print(json.load(open('cal.json'))['wall_seconds'])")
@@ -124,8 +124,10 @@ time_limited() {
   mpirun -np 2 "$SNL" solve "$NET" -o ref.h5 --algorithm pipeline --max-iter "$maxiter" --tol 0 -q ||
     fail "reference run failed"
   step "b) uninterrupted reference run (--max-iter $maxiter) done"
+  local t_job=$SECONDS
   id=$(submit_wait 300 --ntasks=2 --time=1 --signal=B:USR1@55 -o b.log \
     --export="ALL,SNL=$SNL,NET=$NET,OUT=$T/b.h5,MAXITER=$maxiter,TOL=0" "$SRC/jobs/solve.sbatch") || exit 1
+  JOB_SECONDS=$((SECONDS - t_job))
   restarts=$(job_field "$id" Restarts)
   step "b) time-limited job $id finished after $restarts requeues"
   grep '^snl-solve:' b.log
@@ -138,14 +140,14 @@ time_limited() {
   # Every resumed run must start where its checkpoint stopped: the first progress
   # line after "resuming from ... (PHASE iteration K)" is PHASE at >= K, or a later phase.
   awk -v want_resumes="$restarts" '
-    function rank(ph) { return ph == "relaxation" ? 0 : ph == "mm" ? 1 : -1 }
+    function rank(ph) { return ph == "relaxation" ? 0 : (ph == "mm" || ph == "mm-accel") ? 1 : -1 }
     /^snl-solve: resuming from/ {
       if (pending) { print "no progress line after a resume"; bad = 1 }
       ph = $(NF - 2); sub(/^\(/, "", ph); k = $NF; sub(/\)$/, "", k)
       if (k !~ /^[0-9]+$/ || rank(ph) < 0 || (rank(ph) == 0 && k == 0)) { print "bad resume line: " $0; bad = 1 }
       pending = 1; n++; next
     }
-    pending && /^(relaxation|mm) +[0-9]+ / {
+    pending && /^(relaxation|mm|mm-accel) +[0-9]+ / {
       if (rank($1) < rank(ph) || (rank($1) == rank(ph) && $2 + 0 < k + 0)) {
         print "resumed run restarted from scratch: checkpoint " ph " " k ", first progress " $1 " " $2; bad = 1
       }
@@ -162,10 +164,12 @@ time_limited() {
 rc=0
 time_limited "$MAXITER" || rc=$?
 if [ $rc -eq 2 ]; then
-  step "b) the job ended before Slurm's signal (faster than calibrated): again with twice the work"
+  # Calibrated while the machine was busier: size the work by the job's own time.
+  MAXITER=$($PY -c "print(max(2 * $MAXITER, int($MAXITER * 1.5 * $WORK / max($JOB_SECONDS, 1))))")
+  step "b) the job ended before Slurm's signal in $JOB_SECONDS s (faster than calibrated): again with --max-iter $MAXITER"
   rc=0
-  time_limited $((2 * MAXITER)) || rc=$?
-  [ $rc -ne 2 ] || fail "the time-limited job was never signalled, even with twice the work"
+  time_limited "$MAXITER" || rc=$?
+  [ $rc -ne 2 ] || fail "the time-limited job was never signalled, even with the work sized by its own run"
 fi
 [ $rc -eq 0 ] || exit $rc
 echo "slurm_jobs: all checks passed in $((SECONDS - t0)) s"
