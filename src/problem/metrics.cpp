@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cstring>
 
+#include "core/dim_dispatch.hpp"
 #include "core/exact_sum.hpp"
 
 namespace snl {
@@ -196,8 +197,7 @@ CostTerms costs_impl(const LocalizationProblem& prob, const double* x) {
 
 template <unsigned M>
 CostTerms costs_of(const LocalizationProblem& prob, const double* x) {
-  if (prob.dim() == 1) return costs_impl<1, M>(prob, x);
-  return prob.dim() == 2 ? costs_impl<2, M>(prob, x) : costs_impl<3, M>(prob, x);
+  return detail::with_dim(prob.dim(), [&](auto P) { return costs_impl<decltype(P)::value, M>(prob, x); });
 }
 
 }  // namespace
@@ -211,21 +211,11 @@ double evaluate_relaxed_cost(const LocalizationProblem& prob, const double* x) {
 }
 
 void relaxed_gradient(const LocalizationProblem& prob, const double* x, double* g, LocalId begin, LocalId end) {
-  if (prob.dim() == 1)
-    gradient_impl<1, true>(prob, x, g, begin, end);
-  else if (prob.dim() == 2)
-    gradient_impl<2, true>(prob, x, g, begin, end);
-  else
-    gradient_impl<3, true>(prob, x, g, begin, end);
+  detail::with_dim(prob.dim(), [&](auto P) { gradient_impl<decltype(P)::value, true>(prob, x, g, begin, end); });
 }
 
 void ml_gradient(const LocalizationProblem& prob, const double* x, double* g, LocalId begin, LocalId end) {
-  if (prob.dim() == 1)
-    gradient_impl<1, false>(prob, x, g, begin, end);
-  else if (prob.dim() == 2)
-    gradient_impl<2, false>(prob, x, g, begin, end);
-  else
-    gradient_impl<3, false>(prob, x, g, begin, end);
+  detail::with_dim(prob.dim(), [&](auto P) { gradient_impl<decltype(P)::value, false>(prob, x, g, begin, end); });
 }
 
 double ml_cost_and_gradient(const LocalizationProblem& prob, const double* x, double* g, bool relaxed) {
@@ -236,12 +226,10 @@ double ml_cost_and_gradient(const LocalizationProblem& prob, const double* x, do
     return f;
   }
   detail::ExactSum f;
-  if (prob.dim() == 1)
-    relaxed ? gradient_impl<1, true>(prob, x, g, 0, n, &f) : gradient_impl<1, false>(prob, x, g, 0, n, &f);
-  else if (prob.dim() == 2)
-    relaxed ? gradient_impl<2, true>(prob, x, g, 0, n, &f) : gradient_impl<2, false>(prob, x, g, 0, n, &f);
-  else
-    relaxed ? gradient_impl<3, true>(prob, x, g, 0, n, &f) : gradient_impl<3, false>(prob, x, g, 0, n, &f);
+  detail::with_dim(prob.dim(), [&](auto P) {
+    constexpr int p = decltype(P)::value;
+    relaxed ? gradient_impl<p, true>(prob, x, g, 0, n, &f) : gradient_impl<p, false>(prob, x, g, 0, n, &f);
+  });
   detail::allreduce_exact(&f, 1, prob.comm());
   return f.value();
 }

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/dim_dispatch.hpp"
 #include "core/exact_sum.hpp"
 #include "kernels/kernels.hpp"
 #include "snl/problem/metrics.hpp"
@@ -39,12 +40,7 @@ class MM final : public Algorithm {
     lanes_.build(prob_);
     plan_.build(prob_, lanes_, levels_);
     norms_.assign(std::size_t(levels_) * 2 * detail::kMaxLanes, 0.0);
-    if (prob_.dim() == 1)
-      init<1>();
-    else if (prob_.dim() == 2)
-      init<2>();
-    else
-      init<3>();
+    detail::with_dim(prob_.dim(), [&](auto P) { init<decltype(P)::value>(); });
     stream_ = detail::stream_rows(sizeof(double) * (2 * x_.size() + y_.size()));
   }
 
@@ -93,8 +89,7 @@ class MM final : public Algorithm {
   }
   double objective() override {
     prob_.graph().halo().exchange(x_.data(), prob_.dim());
-    if (prob_.dim() == 1) return surrogate<1>();
-    return prob_.dim() == 2 ? surrogate<2>() : surrogate<3>();
+    return detail::with_dim(prob_.dim(), [&](auto P) { return surrogate<decltype(P)::value>(); });
   }
   const double* previous_positions() const override { return xn_.data(); }
   void change_norms(double* d, double* s) const override {

@@ -30,6 +30,7 @@
 #include <array>
 #include <cmath>
 
+#include "core/dim_dispatch.hpp"
 #include "core/exact_sum.hpp"
 #include "kernels/kernels.hpp"
 #include "solvers/algorithm_util.hpp"
@@ -178,12 +179,7 @@ class MMAccel final : public Algorithm {
   // Into y_[kCur] and w_[kCur] (allocated by start()).
   // (y, w) at their best values for x_[kCur], in the dimension's template.
   void init_for_dim() {
-    if (prob_.dim() == 1)
-      init<1>();
-    else if (prob_.dim() == 2)
-      init<2>();
-    else
-      init<3>();
+    detail::with_dim(prob_.dim(), [&](auto P) { init<decltype(P)::value>(); });
   }
   template <int P>
   void init() {
@@ -225,12 +221,7 @@ class MMAccel final : public Algorithm {
     return {sums[0].value(), sums[1].value()};
   }
   void add_surrogate_terms(int b, std::int64_t c0, std::int64_t c1, detail::ExactSum* F) const {
-    if (prob_.dim() == 1)
-      add_terms<1>(b, c0, c1, F);
-    else if (prob_.dim() == 2)
-      add_terms<2>(b, c0, c1, F);
-    else
-      add_terms<3>(b, c0, c1, F);
+    detail::with_dim(prob_.dim(), [&](auto P) { add_terms<decltype(P)::value>(b, c0, c1, F); });
   }
   // Chunks [c0, c1) of the lane layout: each sensor edge at the slot oriented
   // (owner, neighbour) in global-id order (so once over all ranks), then the

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/dim_dispatch.hpp"
 #include "core/exact_sum.hpp"
 #include "kernels/kernels.hpp"
 #include "snl/problem/metrics.hpp"
@@ -150,12 +151,7 @@ class ModelMM final : public Algorithm {
     x_ = with_ghost_rows(prob_, x0);
     xn_ = x_;
     prob_.graph().halo().exchange(x_.data(), prob_.dim());
-    if (prob_.dim() == 1)
-      init<1>();
-    else if (prob_.dim() == 2)
-      init<2>();
-    else
-      init<3>();
+    detail::with_dim(prob_.dim(), [&](auto P) { init<decltype(P)::value>(); });
     dinv_.assign(prob_.num_owned(), 0.0);
     const auto sums = node_weight_sums(prob_);
     for (LocalId v = 0; v < prob_.num_owned(); ++v) {
@@ -166,20 +162,14 @@ class ModelMM final : public Algorithm {
 
   void iterate() override {
     prob_.graph().halo().exchange(x_.data(), prob_.dim());
-    if (prob_.dim() == 1)
-      step<1>();
-    else if (prob_.dim() == 2)
-      step<2>();
-    else
-      step<3>();
+    detail::with_dim(prob_.dim(), [&](auto P) { step<decltype(P)::value>(); });
     std::swap(x_, xn_);  // xn_ keeps x(t) for previous_positions()
   }
 
   const std::vector<double>& positions() const override { return x_; }
   double objective() override {
     prob_.graph().halo().exchange(x_.data(), prob_.dim());
-    if (prob_.dim() == 1) return surrogate<1>();
-    return prob_.dim() == 2 ? surrogate<2>() : surrogate<3>();
+    return detail::with_dim(prob_.dim(), [&](auto P) { return surrogate<decltype(P)::value>(); });
   }
   const double* previous_positions() const override { return xn_.data(); }
   void change_norms(double* d, double* s) const override {
