@@ -2,7 +2,9 @@
 # Share of `snl solve` (default options but --max-iter) spent outside the
 # iteration kernels: history records, stopping sums and tests, exact sums.
 #   NET=net.h5 NP=2 ITERS=300 BINS="/path/old/snl build/bin/snl" bench/bookkeeping.sh
-# One solve per binary, in the order given, each under the shared bench lock;
+#   NET=net.h5 EXTRAS="--test-every 10|" bench/bookkeeping.sh   # option sets, '|'-separated
+# One solve per binary and option set (EXTRAS, default: none), in the order
+# given, each under the shared bench lock;
 # prints the load average before and after each, and per run: iterations,
 # solve_seconds, iterate_seconds, the fraction outside 1 - iterate / solve,
 # stop_test_seconds and record_seconds (where the binary reports them), RMSE,
@@ -19,10 +21,15 @@ mkdir -p "$WORK"
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 i=0
 first=""
+IFS='|' read -r -a extras <<<"${EXTRAS:-}"
+[ ${#extras[@]} -gt 0 ] || extras=("")
 for b in $BINS; do
+for e in "${extras[@]}"; do
   i=$((i + 1))
-  echo "# run $i: $(date -u +%FT%TZ) load $(cut -d' ' -f1-3 /proc/loadavg): mpirun -np $NP $b solve $NET -o $WORK/r$i.h5 --max-iter $ITERS --json $WORK/r$i.json -q"
-  flock "$LOCK" mpirun -np "$NP" "$b" solve "$NET" -o "$WORK/r$i.h5" --max-iter "$ITERS" --json "$WORK/r$i.json" -q
+  rm -f "$WORK/r$i.h5"
+  echo "# run $i: $(date -u +%FT%TZ) load $(cut -d' ' -f1-3 /proc/loadavg): mpirun -np $NP $b solve $NET -o $WORK/r$i.h5 --max-iter $ITERS $e --json $WORK/r$i.json -q"
+  # shellcheck disable=SC2086  # e: words on purpose
+  flock "$LOCK" mpirun -np "$NP" "$b" solve "$NET" -o "$WORK/r$i.h5" --max-iter "$ITERS" $e --json "$WORK/r$i.json" -q
   echo "# run $i ended: $(date -u +%FT%TZ) load $(cut -d' ' -f1-3 /proc/loadavg)"
   [ -n "$first" ] || first="$WORK/r$i.h5"
   /usr/bin/python3 - "$WORK/r$i.json" "$WORK/r$i.h5" "$first" <<'PY'
@@ -34,4 +41,5 @@ print(f"iterations {d['iterations']} solve_s {s:.2f} iterate_s {it:.2f} outside 
       f"stop_test_s {d.get('stop_test_seconds', 'n/a')} record_s {d.get('record_seconds', 'n/a')} "
       f"rmse {d.get('rmse')} ml_cost {d['ml_cost']!r} positions_equal_first {same}")
 PY
+done
 done

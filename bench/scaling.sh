@@ -13,7 +13,10 @@
 # Environment: BIN (default build/bin), WORK (scratch dir, default
 # /tmp/snl-scaling), SIZES, RANKS ("1 2"), ITERS, PARTITION (metis|block),
 # ALGS ("relaxation mm"), WEAK (1: weak-scaling runs, default 1), KEEP (1: keep files),
-# BLOCK (--temporal-block: iterations per pass over memory, default 1).
+# BLOCK (--temporal-block: iterations per pass over memory, default 1), GEN
+# (snl generate options; default none: the generator's defaults, docs/generator.md;
+# GEN="--avg-degree 6 --sigma 0.01 --side 1 --anchors corners" gives the networks
+# of the records before 2026-12-01).
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 BIN=${BIN:-$here/build/bin}
@@ -25,6 +28,7 @@ PARTITION=${PARTITION:-metis}
 ALGS=${ALGS:-"relaxation mm"}
 WEAK=${WEAK:-1}
 BLOCK=${BLOCK:-1}
+GEN=${GEN:-}
 export OMPI_ALLOW_RUN_AS_ROOT=${OMPI_ALLOW_RUN_AS_ROOT:-1} OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=${OMPI_ALLOW_RUN_AS_ROOT_CONFIRM:-1}
 mkdir -p "$WORK"
 rec="$WORK/records.jsonl"
@@ -44,8 +48,8 @@ gen() {  # n -> $WORK/net_n.h5, records generation time and peak RSS
   if [[ ! -f $f ]]; then
     log "generate n=$n"
     local out
-    out=$( { /usr/bin/time -f "RSS %M" "$BIN/snl" generate -o "$f" --sensors "$n" --avg-degree 6 --sigma 0.01 \
-      --localizable no; } 2>&1)
+    # shellcheck disable=SC2086  # GEN: words on purpose
+    out=$( { /usr/bin/time -f "RSS %M" "$BIN/snl" generate -o "$f" --sensors "$n" $GEN --localizable no; } 2>&1)
     local tg tw rss
     tg=$(sed -n 's/.*time: generate \([0-9.]*\) s.*/\1/p' <<<"$out")
     tw=$(sed -n 's/.*, write \([0-9.]*\) s.*/\1/p' <<<"$out")

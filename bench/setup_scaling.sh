@@ -3,6 +3,10 @@
 # and 4 ranks (4 oversubscribed on the 2-core VM), and the positions of every
 # run against the METIS run on the first rank count of NPS, byte for byte.
 #   WORK=/tmp/snl-setup SIZES="1000000 10000000" NPS="1 2 4" ITERS=10 bench/setup_scaling.sh
+# GEN: snl generate options of the networks (default: none, the generator's
+# defaults; GEN="--avg-degree 6 --sigma 0.01 --side 1 --anchors corners
+# --localizable no" gives the older records' networks). LOCK: a lock file the
+# timed runs hold (default: none).
 # Prints one line per run; the solve JSONs stay in $WORK (records.jsonl: one per run).
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
@@ -11,6 +15,9 @@ WORK=${WORK:-/tmp/snl-setup}
 SIZES=${SIZES:-"1000000"}
 NPS=${NPS:-"1 2 4"}
 ITERS=${ITERS:-10}
+GEN=${GEN:-}
+LOCK=${LOCK:-}
+locked() { if [ -n "$LOCK" ]; then flock "$LOCK" "$@"; else "$@"; fi; }
 PY=/usr/bin/python3
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 mkdir -p "$WORK"
@@ -18,11 +25,13 @@ rec="$WORK/records.jsonl"
 echo "# $(date -u +%FT%TZ) $(git -C "$ROOT" rev-parse --short HEAD) $(nproc) cores, load: $(cut -d' ' -f1-3 /proc/loadavg)"
 for n in $SIZES; do
   f="$WORK/net_$n.h5"
-  [[ -f $f ]] || "$BIN/snl" generate -o "$f" --sensors "$n" --avg-degree 6 --sigma 0.01 --localizable no -q
+  # shellcheck disable=SC2086
+  [[ -f $f ]] || "$BIN/snl" generate -o "$f" --sensors "$n" $GEN -q
+  echo "# network $f: snl generate --sensors $n $GEN"
   for np in $NPS; do
     for part in metis parmetis; do
       out="$WORK/r_${n}_${np}_${part}"
-      /usr/bin/time -f "%e" -o "$out.time" mpirun -np "$np" --oversubscribe "$BIN/snl" solve "$f" -o "$out.h5" \
+      locked /usr/bin/time -f "%e" -o "$out.time" mpirun -np "$np" --oversubscribe "$BIN/snl" solve "$f" -o "$out.h5" \
         --partition "$part" --max-iter "$ITERS" --tol 0 -q --json "$out.json"
       $PY - "$out" "$WORK/r_${n}_${NPS%% *}_metis.h5" "$n" "$np" "$part" "$(cat "$out.time")" "$(cut -d' ' -f1 /proc/loadavg)" >>"$rec" <<'PYEOF'
 import json, sys, h5py

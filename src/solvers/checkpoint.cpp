@@ -329,6 +329,7 @@ std::string checkpoint_options(const SolverOptions& opt) {
      << "|history_every=" << opt.history_every << "|bb_rounds=" << opt.bb_rounds;
   // Only when they matter, so that earlier checkpoints still match.
   if (opt.temporal_block != 1) os << "|temporal_block=" << opt.temporal_block;
+  if (opt.test_every != 0) os << "|test_every=" << opt.test_every;
   if (seed_drives_iterates(opt.algorithm)) os << "|seed=" << opt.seed;
   if (opt.weights != "auto") os << "|weights=" << opt.weights;
   if (opt.loss != "l2") os << "|loss=" << opt.loss;

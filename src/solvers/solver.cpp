@@ -3,8 +3,11 @@
 #include <mpi.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <sstream>
+#include <thread>
 
 #include "core/exact_sum.hpp"
 #include "snl/core/mpi_util.hpp"
@@ -29,6 +32,7 @@ std::string SolverOptions::validate() const {
   if (!std::isnan(tol) && (!(tol >= 0) || !std::isfinite(tol))) return "--tol must be a finite number >= 0";
   if (!(grad_tol >= 0) || !std::isfinite(grad_tol)) return "--grad-tol must be a finite number >= 0";
   if (history_every < 0) return "--history-every must be >= 0";
+  if (test_every < 0) return "--test-every must be >= 0";
   if (bb_rounds < 1 || bb_rounds > 10000) return "--bb-rounds must be in [1, 10000]";
   if (!(esdp_rho > 0) || !std::isfinite(esdp_rho)) return "--esdp-rho must be a finite number > 0";
   if (temporal_block < 1 || temporal_block > 64) return "--temporal-block must be in [1, 64]";
@@ -41,6 +45,7 @@ std::string SolverOptions::validate() const {
   if (stop != "papers" && stop != "gradient") return "unknown --stop '" + stop + "' (expected papers or gradient)";
   if (refine != "auto" && refine != "mm" && refine != "mm-accel")
     return "unknown --refine '" + refine + "' (expected auto, mm or mm-accel)";
+  if (test_every != 0 && stop != "gradient") return "--test-every applies to --stop gradient only";
   return unsupported_option();
 }
 
@@ -315,8 +320,13 @@ void Solver::Run::start_phase(Phase& ph) {
   }
 }
 
-// The automatic record interval above 100,000 sensors (at least).
+// Above 100,000 sensors: the automatic record interval (at least) and the
+// automatic gradient-test interval. A test costs about three iterations there
+// (docs/performance.md, "Bookkeeping outside the iterations"): every 50
+// iterations keeps it near 5% of the solve; a converged phase stops up to 49
+// iterations after it could have, a small part of the thousands it runs.
 constexpr std::int64_t kLargeRecordEvery = 100;
+constexpr std::int64_t kLargeTestEvery = 50;
 
 void Solver::Run::set_pass_sizes(Phase& ph) const {
   // Auto: every iteration for small runs; about 1000 records per phase for
@@ -335,9 +345,10 @@ void Solver::Run::set_pass_sizes(Phase& ph) const {
   ph.block = std::max(1, std::min(opt_.temporal_block, ph.alg->max_levels()));
   if (opt_.history_every <= 0) every = (every + ph.block - 1) / ph.block * ph.block;
   ph.every = every;
-  // The gradient test costs about an iteration (an exchange, a pass over the
-  // edges): at most every 10 iterations, at records (which then reuse its f).
-  ph.stop_every = every * ((10 + every - 1) / every);
+  // The gradient test (an exchange, a pass over the edges) at records (which
+  // then reuse its f): every test_every iterations or the next record after.
+  const std::int64_t test = opt_.test_every > 0 ? opt_.test_every : large ? kLargeTestEvery : 10;
+  ph.stop_every = every * ((test + every - 1) / every);
   // A record (the history's costs, gradient norm and errors: three more passes)
   // costs about three iterations on large networks (docs/performance.md,
   // "Bookkeeping"): there the automatic interval is a multiple of the test's,
@@ -381,6 +392,13 @@ std::int64_t Solver::Run::pass_length(const Phase& ph) const {
 }
 
 void Solver::Run::iterate(Phase& ph, std::int64_t n) {
+  // Test hook: seconds of sleep per iteration, so that a job of known length
+  // meets a time limit whatever the machine's load (tests/slurm).
+  static const double delay = [] {
+    const char* v = std::getenv("SNL_TEST_ITERATION_DELAY");
+    return v ? std::atof(v) : 0.0;
+  }();
+  if (delay > 0) std::this_thread::sleep_for(std::chrono::duration<double>(delay * static_cast<double>(n)));
   const double w0 = halo_.wait_seconds(), ti = MPI_Wtime();
   // A rank-local failure (std::bad_alloc) while the others wait in the
   // iteration's collectives cannot be agreed on: it aborts every rank.

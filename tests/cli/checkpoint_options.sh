@@ -67,6 +67,7 @@ mapfile -t o < <(with PIPE --max-iter 240);          refused PIPE "--max-iter 12
 mapfile -t o < <(with PIPE --tol 1e-11);             refused PIPE "--tol 9.9999999999999998e-13 in the checkpoint, 9.9999999999999994e-12 now" "$T/net.h5" "${o[@]}"
 mapfile -t o < <(with PIPE --grad-tol 1e-13);        refused PIPE "--grad-tol .* in the checkpoint, .* now" "$T/net.h5" "${o[@]}"
 mapfile -t o < <(with PIPE --history-every 10);      refused PIPE "--history-every 5 in the checkpoint, 10 now" "$T/net.h5" "${o[@]}"
+mapfile -t o < <(with PIPE --test-every 20);         refused PIPE "--test-every its default in the checkpoint, 20 now" "$T/net.h5" "${o[@]}"
 mapfile -t o < <(with PIPE --temporal-block 4);      refused PIPE "--temporal-block 2 in the checkpoint, 4 now" "$T/net.h5" "${o[@]}"
 mapfile -t o < <(with PIPE --temporal-block 1);      refused PIPE "--temporal-block 2 in the checkpoint, its default now" "$T/net.h5" "${o[@]}"
 mapfile -t o < <(with BB --bb-rounds 20);            refused BB "--bb-rounds 10 in the checkpoint, 20 now" "$T/net.h5" "${o[@]}"

@@ -2,8 +2,8 @@
 # The batch scripts of jobs/ under a real (private, one-node) Slurm:
 #  a) jobs/solve.sbatch on 2 tasks (mpirun inside the allocation, and srun
 #     --mpi=pmix) gives the positions of a direct mpirun -np 2 snl solve;
-#  b) a job with --time=1 --signal=B:USR1@55 on a solve that needs about
-#     WORK_SECONDS (default 50) is signalled before its time limit, checkpoints,
+#  b) a job with --time=1 --signal=B:USR1@55 on a solve slowed to over 40 s
+#     by a test hook is signalled before its time limit, checkpoints,
 #     requeues itself and resumes (maybe several times) until it finishes with
 #     the positions of an uninterrupted run; every resumed run starts at the
 #     checkpoint's phase and iteration (snl's own progress lines say so);
@@ -107,69 +107,48 @@ step "c) experiment_array.sbatch: 3 tasks == direct runs with their seeds; merge
 
 # ---- b) time limit: signal, checkpoint, requeue, resume.
 # Slurm tests time limits every 30 s, so --time=1 --signal=B:USR1@55 reaches
-# the batch shell 5-35 s into every run: a solve that needs about WORK_SECONDS
-# (default 50; sized by a short calibration run) is always stopped at least
-# once. Should the machine speed up enough for the job to end unsignalled, the
-# run is repeated once with the work sized by that job's own time.
-WORK=${WORK_SECONDS:-50}
-mpirun -np 2 "$SNL" solve "$NET" -o cal.h5 --algorithm pipeline --max-iter 10000 --tol 0 --json cal.json -q
-cal=$($PY -c "import json; print(json.load(open('cal.json'))['wall_seconds'])")
-MAXITER=$($PY -c "print(max(20000, int(10000 * $WORK / $cal)))")
-step "b) calibration: 2x10000 iterations in $cal s -> --max-iter $MAXITER"
-
-# One time-limited job against an uninterrupted run; status 2: never signalled.
-time_limited() {
-  local maxiter=$1 id restarts
-  rm -f ref.h5 b.h5 b.ckpt.h5 b.json b.log
-  mpirun -np 2 "$SNL" solve "$NET" -o ref.h5 --algorithm pipeline --max-iter "$maxiter" --tol 0 -q ||
-    fail "reference run failed"
-  step "b) uninterrupted reference run (--max-iter $maxiter) done"
-  local t_job=$SECONDS
-  id=$(submit_wait 300 --ntasks=2 --time=1 --signal=B:USR1@55 -o b.log \
-    --export="ALL,SNL=$SNL,NET=$NET,OUT=$T/b.h5,MAXITER=$maxiter,TOL=0" "$SRC/jobs/solve.sbatch") || exit 1
-  JOB_SECONDS=$((SECONDS - t_job))
-  restarts=$(job_field "$id" Restarts)
-  step "b) time-limited job $id finished after $restarts requeues"
-  grep '^snl-solve:' b.log
-  [ "$(job_field "$id" JobState)" = COMPLETED ] || fail "time-limited job state $(job_field "$id" JobState)"
-  if [ "${restarts:-0}" -eq 0 ]; then
-    grep -q 'stopped by a signal' b.log && fail "the job was stopped by Slurm's signal but not requeued"
-    return 2
-  fi
-  [ "$(grep -c 'requeueing job' b.log)" -eq "$restarts" ] || fail "requeue count in the log differs from Slurm's"
-  # Every resumed run must start where its checkpoint stopped: the first progress
-  # line after "resuming from ... (PHASE iteration K)" is PHASE at >= K, or a later phase.
-  awk -v want_resumes="$restarts" '
-    function rank(ph) { return ph == "relaxation" ? 0 : (ph == "mm" || ph == "mm-accel") ? 1 : -1 }
-    /^snl-solve: resuming from/ {
-      if (pending) { print "no progress line after a resume"; bad = 1 }
-      ph = $(NF - 2); sub(/^\(/, "", ph); k = $NF; sub(/\)$/, "", k)
-      if (k !~ /^[0-9]+$/ || rank(ph) < 0 || (rank(ph) == 0 && k == 0)) { print "bad resume line: " $0; bad = 1 }
-      pending = 1; n++; next
-    }
-    pending && /^(relaxation|mm|mm-accel) +[0-9]+ / {
-      if (rank($1) < rank(ph) || (rank($1) == rank(ph) && $2 + 0 < k + 0)) {
-        print "resumed run restarted from scratch: checkpoint " ph " " k ", first progress " $1 " " $2; bad = 1
-      }
-      pending = 0
-    }
-    END {
-      if (pending) { print "no progress line after the last resume"; bad = 1 }
-      if (n != want_resumes) { print n " resumes in the log, " want_resumes " requeues"; bad = 1 }
-      exit bad
-    }' b.log || fail "the requeued runs did not resume from their checkpoints (see above)"
-  same_positions ref.h5 b.h5 "signalled, requeued and resumed job"
-  step "b) positions equal the uninterrupted run's"
-}
-rc=0
-time_limited "$MAXITER" || rc=$?
-if [ $rc -eq 2 ]; then
-  # Calibrated while the machine was busier: size the work by the job's own time.
-  MAXITER=$($PY -c "print(max(2 * $MAXITER, int($MAXITER * 1.5 * $WORK / max($JOB_SECONDS, 1))))")
-  step "b) the job ended before Slurm's signal in $JOB_SECONDS s (faster than calibrated): again with --max-iter $MAXITER"
-  rc=0
-  time_limited "$MAXITER" || rc=$?
-  [ $rc -ne 2 ] || fail "the time-limited job was never signalled, even with the work sized by its own run"
+# the batch shell 5-35 s into every run. The job's 2 x MAXITER iterations sleep
+# DELAY s each (snl's test hook SNL_TEST_ITERATION_DELAY), so every run would
+# take over 40 s whatever the machine's load: it is always stopped at least
+# once, and how far it gets before each signal varies.
+MAXITER=1000
+DELAY=0.021
+mpirun -np 2 "$SNL" solve "$NET" -o ref.h5 --algorithm pipeline --max-iter "$MAXITER" --tol 0 -q ||
+  fail "reference run failed"
+step "b) uninterrupted reference run (--max-iter $MAXITER) done"
+id=$(submit_wait 600 --ntasks=2 --time=1 --signal=B:USR1@55 -o b.log \
+  --export="ALL,SNL=$SNL,NET=$NET,OUT=$T/b.h5,MAXITER=$MAXITER,TOL=0,SNL_TEST_ITERATION_DELAY=$DELAY" \
+  "$SRC/jobs/solve.sbatch") || exit 1
+restarts=$(job_field "$id" Restarts)
+step "b) time-limited job $id finished after $restarts requeues"
+grep '^snl-solve:' b.log
+[ "$(job_field "$id" JobState)" = COMPLETED ] || fail "time-limited job state $(job_field "$id" JobState)"
+if [ "${restarts:-0}" -eq 0 ]; then
+  grep -q 'stopped by a signal' b.log && fail "the job was stopped by Slurm's signal but not requeued"
+  fail "the time-limited job was never signalled"
 fi
-[ $rc -eq 0 ] || exit $rc
+[ "$(grep -c 'requeueing job' b.log)" -eq "$restarts" ] || fail "requeue count in the log differs from Slurm's"
+# Every resumed run must start where its checkpoint stopped: the first progress
+# line after "resuming from ... (PHASE iteration K)" is PHASE at >= K, or a later phase.
+awk -v want_resumes="$restarts" '
+  function rank(ph) { return ph == "relaxation" ? 0 : (ph == "mm" || ph == "mm-accel") ? 1 : -1 }
+  /^snl-solve: resuming from/ {
+    if (pending) { print "no progress line after a resume"; bad = 1 }
+    ph = $(NF - 2); sub(/^\(/, "", ph); k = $NF; sub(/\)$/, "", k)
+    if (k !~ /^[0-9]+$/ || rank(ph) < 0 || (rank(ph) == 0 && k == 0)) { print "bad resume line: " $0; bad = 1 }
+    pending = 1; n++; next
+  }
+  pending && /^(relaxation|mm|mm-accel) +[0-9]+ / {
+    if (rank($1) < rank(ph) || (rank($1) == rank(ph) && $2 + 0 < k + 0)) {
+      print "resumed run restarted from scratch: checkpoint " ph " " k ", first progress " $1 " " $2; bad = 1
+    }
+    pending = 0
+  }
+  END {
+    if (pending) { print "no progress line after the last resume"; bad = 1 }
+    if (n != want_resumes) { print n " resumes in the log, " want_resumes " requeues"; bad = 1 }
+    exit bad
+  }' b.log || fail "the requeued runs did not resume from their checkpoints (see above)"
+same_positions ref.h5 b.h5 "signalled, requeued and resumed job"
+step "b) positions equal the uninterrupted run's"
 echo "slurm_jobs: all checks passed in $((SECONDS - t0)) s"

@@ -46,7 +46,7 @@ struct SolverOptions {
   ///             MM, mm-accel and BB, f_hat for the others): the gradient against
   ///             the norm it would have if its edge terms did not cancel
   ///             (docs/quality.md, "Stopping rule"), tested every
-  ///             stop_interval() iterations.
+  ///             test_every iterations.
   std::string stop = "gradient";
   /// The refinement the pipeline runs after the relaxation: mm | mm-accel, or
   /// auto (the default): mm-accel under the plain l2 unweighted model, mm when
@@ -69,6 +69,11 @@ struct SolverOptions {
   /// (every iteration up to 2000, else about 1000 records per phase; above
   /// 100,000 sensors at least every 100 iterations, at gradient tests).
   std::int64_t history_every = 0;
+  /// Iterations between the gradient rule's tests (each an extra exchange and
+  /// a pass over the edges, about three iterations' time), rounded up to a
+  /// multiple of the record interval; 0: auto, 10, or 50 above 100,000
+  /// sensors (docs/performance.md, "Bookkeeping outside the iterations").
+  std::int64_t test_every = 0;
   /// Consensus rounds per BB iteration (Calafiore et al. use 20).
   int bb_rounds = 20;
   /// ADMM penalty of esdp-dist (docs/esdp-dist.md).
