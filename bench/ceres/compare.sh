@@ -13,7 +13,8 @@
 # auto). Needs a build with -DSNL_BUILD_CERES=ON (BUILD, default ./build).
 # Environment (defaults): NP (1) snl ranks, THREADS (1) Ceres threads,
 #   SNL_TOL (1e-7, gradient rule), SNL_ITER (20000), MM_ITER (SNL_ITER; MM's cap), CERES_ITER (100),
-#   ALGS ("mm mm-accel": the snl refinements to run),
+#   ALGS ("mm mm-accel": the snl refinements to run), EVERY (10: their history interval;
+#   a record costs about three iterations, so large networks want more),
 #   CERES_TOL (1e-12: function, gradient and parameter tolerance), CRLB (1: `snl eval --crlb`
 #   on the network once), LOCK (a lock file, default WORK/bench.lock; every command runs under flock).
 set -euo pipefail
@@ -30,6 +31,7 @@ MM_ITER=${MM_ITER:-$SNL_ITER}
 ALGS=${ALGS:-mm mm-accel}
 CERES_ITER=${CERES_ITER:-100} CERES_TOL=${CERES_TOL:-1e-12}
 CRLB=${CRLB:-1}
+EVERY=${EVERY:-10}
 LOCK=${LOCK:-$WORK/bench.lock}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 for f in "$SNL" "$CERES"; do [ -x "$f" ] || { echo "missing $f (build with -DSNL_BUILD_CERES=ON)" >&2; exit 1; }; done
@@ -65,7 +67,7 @@ for n in "$@"; do
     cap=$SNL_ITER
     [ $alg = mm ] && cap=$MM_ITER
     timed "$o/$alg.$rep.log" "${RUN[@]}" "$SNL" solve "$net" -o "$w/$alg.h5" --algorithm $alg --init "$w/R0.h5" \
-      --tol "$SNL_TOL" --max-iter "$cap" --history-every 10 --json "$o/$alg.$rep.json"
+      --tol "$SNL_TOL" --max-iter "$cap" --history-every "$EVERY" --json "$o/$alg.$rep.json"
     history_csv "$w/$alg.h5" "$o/$alg.$rep.history.csv"
   done
   timed "$o/ceres.$rep.log" "$CERES" "$net" "$w/R0.h5" -o "$w/ceres.h5" --json "$o/ceres.$rep.json" \

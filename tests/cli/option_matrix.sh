@@ -1,28 +1,30 @@
 #!/usr/bin/env bash
-# Options only some algorithms honour (--grad-tol, --temporal-block, --bb-rounds),
-# against every algorithm. The expected capabilities are written out here, from
-# what the methods do (a gradient norm: relaxation and both BBs; several iterations per
-# pass: relaxation and MM; consensus rounds: both BBs), independently of the registry
+# Options only some algorithms honour (--grad-tol, --temporal-block, --bb-rounds,
+# --esdp-rho), against every distributed algorithm. The expected capabilities are
+# written out here, from what the methods do (a gradient norm: relaxation and both
+# BBs; several iterations per pass: relaxation and MM; consensus rounds: both BBs;
+# an ADMM penalty: esdp-dist), independently of the registry
 # (the centralized relaxations, which refuse all three, are tested in sdp_relaxations.sh):
 #  - refused pair: exit 2 with one "snl: error:" line naming the option, on 1 and
 #    2 ranks, an existing output left untouched and no JSON written; the
 #    option at its default value is accepted;
 #  - accepted pair: the option has an effect (--grad-tol large stops earlier,
 #    --temporal-block 4 records at pass ends with the same positions,
-#    --bb-rounds changes the communications).
+#    --bb-rounds changes the communications, --esdp-rho changes the positions).
 source "$(dirname "$0")/common.bash"
 "$SNL" generate -o "$T/net.h5" --sensors 150 --avg-degree 7 --sigma 0.05 --seed 11 -q
 "$SNL" solve "$T/net.h5" -o "$T/keep.h5" --max-iter 5 --tol 0 -q
 sum0=$(md5sum < "$T/keep.h5")
 
-ALGS="relaxation mm mm-accel pipeline bb bb-calafiore pm async async-exact"
+ALGS="relaxation mm mm-accel pipeline bb bb-calafiore pm async async-exact esdp-dist"
 declare -A HONOURED=(
   [grad-tol]="relaxation pipeline bb bb-calafiore"
   [temporal-block]="relaxation mm pipeline"
   [bb-rounds]="bb bb-calafiore"
+  [esdp-rho]="esdp-dist"
 )
-declare -A VALUE=([grad-tol]=1e6 [temporal-block]=4 [bb-rounds]=5)
-declare -A DEFAULT=([grad-tol]=0 [temporal-block]=1 [bb-rounds]=20)
+declare -A VALUE=([grad-tol]=1e6 [temporal-block]=4 [bb-rounds]=5 [esdp-rho]=3)
+declare -A DEFAULT=([grad-tol]=0 [temporal-block]=1 [bb-rounds]=20 [esdp-rho]=1)
 
 json() { "$PY" -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])" "$@"; }
 history_len() { "$PY" -c "import h5py,sys; print(len(h5py.File(sys.argv[1])['history/iteration']))" "$1"; }
@@ -52,6 +54,10 @@ check_effect() {  # check_effect OPTION ALG
       solve "$with" "$alg" --max-iter 20 --tol 0 --bb-rounds "${VALUE[$opt]}"
       [ "$(json "$T/$with.json" communications_per_sensor)" != "$(json "$T/$base.json" communications_per_sensor)" ] \
         || fail "--bb-rounds did not change the communications of $alg" ;;
+    esdp-rho)
+      solve "$base" "$alg" --max-iter 20 --tol 0
+      solve "$with" "$alg" --max-iter 20 --tol 0 --esdp-rho "${VALUE[$opt]}"
+      ! h5diff -q "$T/$base.h5" "$T/$with.h5" /positions > /dev/null || fail "--esdp-rho did not change the positions of $alg" ;;
   esac
 }
 
@@ -76,7 +82,7 @@ check_refused() {  # check_refused OPTION ALG
 }
 
 refused=0 accepted=0
-for opt in grad-tol temporal-block bb-rounds; do
+for opt in grad-tol temporal-block bb-rounds esdp-rho; do
   for alg in $ALGS; do
     if [[ " ${HONOURED[$opt]} " == *" $alg "* ]]; then
       check_effect "$opt" "$alg"
