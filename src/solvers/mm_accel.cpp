@@ -227,9 +227,13 @@ class MMAccel final : public Algorithm {
   // (owner, neighbour) in global-id order (so once over all ranks), then the
   // chunk's anchor edges.
   // F[0] gets F's terms, F[1] f's: 0.5 (|x_i - x_j| - d_e)^2 per edge.
+  // Each register lane adds into its own accumulators (merged at the end; the
+  // sums are exact, so grouping changes no bit): consecutive adds then do not
+  // wait on each other's digits.
   template <int P>
   void add_terms(int b, std::int64_t c0, std::int64_t c1, detail::ExactSum* F) const {
     const int C = lanes_.lanes;
+    detail::ExactSum accF[detail::kMaxLanes], accf[detail::kMaxLanes];
     const auto& aoff = prob_.anchor_offsets();
     const double* x = x_[b].data();
     const double* y = y_[b].data();
@@ -249,8 +253,8 @@ class MMAccel final : public Algorithm {
             z2 += z * z;
           }
           const double m = std::sqrt(z2) - lanes_.rho[g * C + L];
-          F[0].add(0.5 * s);
-          F[1].add(0.5 * m * m);
+          accF[L].add(0.5 * s);
+          accf[L].add(0.5 * m * m);
         }
       }
       for (LocalId v = lanes_.first[c]; v < lanes_.first[c] + lanes_.count[c]; ++v)
@@ -263,9 +267,13 @@ class MMAccel final : public Algorithm {
             z2 += z * z;
           }
           const double m = std::sqrt(z2) - prob_.anchor_ranges()[e];
-          F[0].add(0.5 * s);
-          F[1].add(0.5 * m * m);
+          accF[0].add(0.5 * s);
+          accf[0].add(0.5 * m * m);
         }
+    }
+    for (int L = 0; L < C; ++L) {
+      F[0].add(accF[L]);
+      F[1].add(accf[L]);
     }
   }
 
