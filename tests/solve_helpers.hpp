@@ -5,6 +5,7 @@
 // tests' common start, and the world rank and size for sub-communicators.
 #include <mpi.h>
 
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -37,6 +38,30 @@ inline std::vector<double> run(MPI_Comm comm, const Network& whole, const std::s
   std::vector<double> x;
   solver.solve(random_initial_positions(prob, 3), &x);
   return allgather_positions(prob, x);
+}
+
+/// A whole solve's summary and its positions (global order).
+struct Outcome {
+  Summary s;
+  std::vector<double> x;
+};
+
+/// `opt` solved on `comm` from random_initial_positions(prob, 3).
+inline Outcome solve_outcome(MPI_Comm comm, const Network& whole, const SolverOptions& opt) {
+  LocalizationProblem prob(comm, slab_of(whole, comm), PartitionMethod::kMetis, nullptr);
+  Solver solver(prob, opt);
+  Outcome o;
+  std::vector<double> x;
+  o.s = solver.solve(random_initial_positions(prob, 3), &x);
+  o.x = allgather_positions(prob, x);
+  return o;
+}
+
+/// A method's own value in a summary (Summary::method_values), NaN if absent.
+inline double method_value(const Summary& s, const std::string& key) {
+  for (const auto& v : s.method_values)
+    if (v.first == key) return v.second;
+  return NAN;
 }
 
 inline int world_rank() {

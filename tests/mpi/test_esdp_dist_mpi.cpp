@@ -21,13 +21,10 @@ using snl::test::world_size;
 
 namespace {
 
-struct Outcome {
-  Summary s;
-  std::vector<double> x;  // all positions, global order
-};
+using snl::test::method_value;
+using snl::test::Outcome;
 
 Outcome solve(MPI_Comm comm, const Network& w, const std::string& alg, std::int64_t iters, double tol = 0) {
-  LocalizationProblem prob(comm, slab_of(w, comm), PartitionMethod::kMetis, nullptr);
   SolverOptions opt;
   opt.algorithm = alg;
   if (alg == "esdp-dist") {
@@ -36,18 +33,7 @@ Outcome solve(MPI_Comm comm, const Network& w, const std::string& alg, std::int6
     opt.tol = tol;
     opt.history_every = 50;
   }
-  Solver solver(prob, opt);
-  Outcome o;
-  std::vector<double> x;
-  o.s = solver.solve(random_initial_positions(prob, 3), &x);
-  o.x = allgather_positions(prob, x);
-  return o;
-}
-
-double value(const Summary& s, const std::string& key) {
-  for (const auto& v : s.method_values)
-    if (v.first == key) return v.second;
-  return NAN;
+  return snl::test::solve_outcome(comm, w, opt);
 }
 
 double max_abs_diff(const std::vector<double>& a, const std::vector<double>& b) {
@@ -78,11 +64,11 @@ TEST(EsdpDist, ConvergesToTheCentralizedEsdp) {
   const Network w = small_network(0.2);
   const Outcome c = solve(MPI_COMM_SELF, w, "esdp", 0);
   const Outcome d = solve(MPI_COMM_SELF, w, "esdp-dist", 6000);
-  const double fc = value(c.s, "relaxation_objective"), fd = d.s.final_cost;
+  const double fc = method_value(c.s, "relaxation_objective"), fd = d.s.final_cost;
   ASSERT_TRUE(std::isfinite(fc) && std::isfinite(fd));
   EXPECT_NEAR(fd, fc, 2e-3 * std::abs(fc));
-  EXPECT_EQ(value(d.s, "relaxation_objective"), fd);
-  EXPECT_LT(value(d.s, "consensus_residual"), 1e-5);
+  EXPECT_EQ(method_value(d.s, "relaxation_objective"), fd);
+  EXPECT_LT(method_value(d.s, "consensus_residual"), 1e-5);
   EXPECT_LE(fd, d.s.costs.ml);  // a relaxation: below the ML cost at its own point
 
   const Network exact = small_network(0.0, true);
@@ -111,7 +97,7 @@ TEST(EsdpDist, BitIdenticalForOneTwoThreeRanks) {
     ASSERT_EQ(o.x.size(), ref.x.size());
     EXPECT_EQ(0, std::memcmp(o.x.data(), ref.x.data(), o.x.size() * sizeof(double))) << k << " ranks";
     EXPECT_EQ(o.s.final_cost, ref.s.final_cost) << k << " ranks";
-    EXPECT_EQ(value(o.s, "consensus_residual"), value(ref.s, "consensus_residual")) << k << " ranks";
+    EXPECT_EQ(method_value(o.s, "consensus_residual"), method_value(ref.s, "consensus_residual")) << k << " ranks";
     ASSERT_EQ(o.s.history.size(), ref.s.history.size());
     for (std::size_t h = 0; h < o.s.history.size(); ++h) EXPECT_EQ(o.s.history[h].cost, ref.s.history[h].cost);
     MPI_Comm_free(&sub);

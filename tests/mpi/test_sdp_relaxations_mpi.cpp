@@ -49,27 +49,13 @@ Network exact_network() {
   return w;
 }
 
-struct Outcome {
-  Summary s;
-  std::vector<double> x;  // all positions, global order
-};
+using snl::test::method_value;
+using snl::test::Outcome;
 
 Outcome solve(MPI_Comm comm, const Network& w, const std::string& alg) {
-  LocalizationProblem prob(comm, slab_of(w, comm), PartitionMethod::kMetis, nullptr);
   SolverOptions opt;
   opt.algorithm = alg;
-  Solver solver(prob, opt);
-  Outcome o;
-  std::vector<double> x;
-  o.s = solver.solve(random_initial_positions(prob, 3), &x);
-  o.x = allgather_positions(prob, x);
-  return o;
-}
-
-double value(const Summary& s, const std::string& key) {
-  for (const auto& v : s.method_values)
-    if (v.first == key) return v.second;
-  return NAN;
+  return snl::test::solve_outcome(comm, w, opt);
 }
 
 }  // namespace
@@ -82,7 +68,7 @@ TEST(SdpRelaxations, TightOnExactRangesRecoverTheTruth) {
     EXPECT_EQ(o.s.iterations, 1) << alg;
     ASSERT_EQ(o.x.size(), w.truth.size());
     for (std::size_t t = 0; t < o.x.size(); ++t) EXPECT_NEAR(o.x[t], w.truth[t], 1e-4) << alg << " coordinate " << t;
-    EXPECT_NEAR(value(o.s, "relaxation_objective"), 0.0, 1e-7) << alg;
+    EXPECT_NEAR(method_value(o.s, "relaxation_objective"), 0.0, 1e-7) << alg;
     ASSERT_EQ(o.s.method_texts.size(), 2u);
     EXPECT_EQ(o.s.method_texts[1].second, "converged") << alg;
   }
@@ -93,7 +79,7 @@ TEST(SdpRelaxations, LowerBoundsOnTheMLCostAndSameBitsOnAnyRankCount) {
   double sdp_obj = NAN, esdp_obj = NAN;
   for (const char* alg : {"sdp", "esdp", "edm"}) {
     const Outcome ref = solve(MPI_COMM_SELF, w, alg);
-    const double obj = value(ref.s, "relaxation_objective");
+    const double obj = method_value(ref.s, "relaxation_objective");
     EXPECT_LE(obj, ref.s.costs.ml + 1e-9) << alg;
     if (std::string(alg) == "sdp") sdp_obj = obj;
     if (std::string(alg) == "esdp") esdp_obj = obj;
