@@ -37,7 +37,7 @@ while read -r f; do
 done < "$T/list"
 echo "bad_input: $n failing runs checked"
 # Invalid solver options: one clear message, a non-zero exit, the output untouched.
-for bad in "--temporal-block 0" "--temporal-block 65" "--max-iter -1"; do
+for bad in "--temporal-block 0" "--temporal-block 65" "--max-iter -1" "--test-every -1" "--test-every 20 --stop papers"; do
   set +e
   # shellcheck disable=SC2086
   mpi 2 "$SNL" solve "$T/net.h5" -o "$T/keep.h5" $bad -q > /dev/null 2> "$T/err"; rc=$?
@@ -45,6 +45,7 @@ for bad in "--temporal-block 0" "--temporal-block 65" "--max-iter -1"; do
   [ $rc -ne 0 ] && [ $rc -lt 128 ] || fail "$bad: exit status $rc"
   [ "$(grep -c '^snl: error: ' "$T/err")" -eq 1 ] || { cat "$T/err"; fail "$bad: expected exactly one error message"; }
   [ "$(md5sum < "$T/keep.h5")" = "$sum0" ] || fail "$bad: existing output was modified"
+  case $bad in --test-every*) grep -q -- "--test-every" "$T/err" || { cat "$T/err"; fail "$bad: unclear message"; } ;; esac
 done
 # Output directory missing, and an unwritable output: clear errors, no hang.
 set +e
