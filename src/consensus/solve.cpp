@@ -2,10 +2,8 @@
 // structure on the partitioned network, runs primal iterations with history
 // records, checkpoints and stop signals, and reports.
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdlib>
-#include <thread>
 
 #include "consensus/solver_detail.hpp"
 #include "snl/core/mpi_util.hpp"
@@ -281,12 +279,8 @@ SolveSummary solve(MPI_Comm comm, const ProblemData& data, const SolveOptions& o
   const std::int64_t max_iter = opt.max_iterations();
   const double tol = opt.tolerance();
   s.termination = "NO_CONVERGENCE";
-  static const double delay = [] {
-    const char* v = std::getenv("SNL_TEST_CONSENSUS_DELAY");  // test hook: seconds per primal iteration
-    return v ? std::atof(v) : 0.0;
-  }();
   while (k < max_iter) {
-    if (delay > 0) std::this_thread::sleep_for(std::chrono::duration<double>(delay));
+    test_delay("SNL_TEST_CONSENSUS_DELAY");  // seconds per primal iteration
     bool ok = true;
     abort_on_local_failure(comm, "iteration", [&] { ok = r.iterate(k, c); });
     ++k;

@@ -1,11 +1,15 @@
 #include "snl/core/mpi_util.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <climits>
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
+#include <map>
 #include <stdexcept>
+#include <string>
+#include <thread>
 
 namespace snl {
 
@@ -113,6 +117,16 @@ void abort_all(MPI_Comm comm, const std::string& what) {
   std::fflush(stderr);
   MPI_Abort(comm, 70);
   std::abort();  // MPI_Abort does not return; keep [[noreturn]] honest
+}
+
+void test_delay(const char* env, double units) {
+  static std::map<std::string, double> per_unit;  // each variable read once
+  auto it = per_unit.find(env);
+  if (it == per_unit.end()) {
+    const char* v = std::getenv(env);
+    it = per_unit.emplace(env, v ? std::atof(v) : 0.0).first;
+  }
+  if (it->second > 0) std::this_thread::sleep_for(std::chrono::duration<double>(it->second * units));
 }
 
 void test_fail_point(const char* point, long long iteration) {

@@ -3,11 +3,8 @@
 #include <mpi.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
-#include <cstdlib>
 #include <sstream>
-#include <thread>
 
 #include "core/exact_sum.hpp"
 #include "snl/core/mpi_util.hpp"
@@ -392,13 +389,7 @@ std::int64_t Solver::Run::pass_length(const Phase& ph) const {
 }
 
 void Solver::Run::iterate(Phase& ph, std::int64_t n) {
-  // Test hook: seconds of sleep per iteration, so that a job of known length
-  // meets a time limit whatever the machine's load (tests/slurm).
-  static const double delay = [] {
-    const char* v = std::getenv("SNL_TEST_ITERATION_DELAY");
-    return v ? std::atof(v) : 0.0;
-  }();
-  if (delay > 0) std::this_thread::sleep_for(std::chrono::duration<double>(delay * static_cast<double>(n)));
+  test_delay("SNL_TEST_ITERATION_DELAY", static_cast<double>(n));  // tests/slurm: a job of known length
   const double w0 = halo_.wait_seconds(), ti = MPI_Wtime();
   // A rank-local failure (std::bad_alloc) while the others wait in the
   // iteration's collectives cannot be agreed on: it aborts every rank.

@@ -90,6 +90,12 @@ void abort_on_local_failure(MPI_Comm comm, const char* stage, F&& f) {
 /// (one getenv at the first call) when the variable is unset.
 void test_fail_point(const char* point, long long iteration = -1);
 
+/// Slow-down hook for tests: sleeps `units` times the seconds given by the
+/// environment variable `env` (e.g. SNL_TEST_ITERATION_DELAY, per iteration),
+/// so that a run of known length meets a time limit or a signal whatever the
+/// machine's load. A no-op when the variable is unset.
+void test_delay(const char* env, double units = 1.0);
+
 /// Broadcast a string from root.
 std::string bcast_string(MPI_Comm comm, const std::string& s, int root = 0);
 
