@@ -9,10 +9,11 @@ shift || true
 
 # slurm-wlm and munge: tests/slurm runs the job scripts of jobs/ under a private
 # one-node Slurm that it starts and stops itself (it never uses a system-wide one).
+# gdb: a test run that hangs prints the stacks of its processes (tests/cli/common.bash).
 PKGS=(build-essential cmake ninja-build pkg-config openmpi-bin libopenmpi-dev libhdf5-openmpi-dev hdf5-tools
       libeigen3-dev libmetis-dev libscotchparmetis-dev libptscotch-dev libdsdp-dev libgtest-dev libgmock-dev libcli11-dev libbenchmark-dev
       python3-numpy python3-h5py python3-matplotlib clang libclang-rt-14-dev
-      slurm-wlm munge)
+      slurm-wlm munge gdb)
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

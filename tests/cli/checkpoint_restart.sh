@@ -33,7 +33,7 @@ for case in async pipeline pipeline4 bb mm3 mm-accel mm; do  # mm last: the refu
   for _ in $(seq 400); do [ -f "$T/ck.h5" ] && break; sleep 0.05; done
   sleep 0.2
   kill -USR1 $pid
-  wait $pid
+  wait_watched $pid "$case: the signalled run"
   rc=$?
   set -e
   [ $rc -eq 3 ] || fail "$case: expected exit status 3 after SIGUSR1, got $rc"

@@ -7,5 +7,70 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_
 PY=/usr/bin/python3
 T=$(mktemp -d "${TMPDIR:-/tmp}/snl_cli.XXXXXX")
 trap 'rm -rf "$T"' EXIT
-mpi() { local np=$1; shift; "$MPIEXEC" "$MPIEXEC_NUMPROC_FLAG" "$np" --oversubscribe "$@"; }
 fail() { echo "FAIL: $*" >&2; exit 1; }
+# Every MPI run of a test is watched. One that outlives SNL_TEST_RUN_LIMIT
+# seconds (default 240; the longest run of any test takes a few seconds) is a
+# hang: the stacks of mpirun and its ranks are printed (gdb, installed by
+# scripts/setup.sh), the processes are killed and the test fails, unless every
+# snl rank sits in MPI_Init or MPI_Finalize (or none is left and mpirun
+# lingers). That is Open MPI 4.1's own start-up/shut-down hang, rare and known
+# upstream (open-mpi/ompi#10117): it is reported and the run repeated once.
+descendants() { local p; for p in $(pgrep -P "$1"); do echo "$p"; descendants "$p"; done; }
+# hang_report PID: prints the processes and their stacks; status 0 when the
+# hang is inside Open MPI's runtime, 1 when an snl rank is elsewhere (or no gdb).
+hang_report() {
+  local pid=$1 p comm stack ranks=0 in_runtime=0
+  local procs=("$pid" $(descendants "$pid"))
+  ps -o pid=,etimes=,stat=,args= -p "$(IFS=,; echo "${procs[*]}")" | cut -c1-200
+  command -v gdb > /dev/null || { echo "(no gdb: no stacks)"; return 1; }
+  for p in "${procs[@]}"; do
+    comm=$(cat "/proc/$p/comm" 2> /dev/null) || continue
+    stack=$(timeout 60 gdb -nx -batch -p "$p" -ex "thread apply all bt" 2> /dev/null | grep -E '^(Thread|#)' || true)
+    echo "--- $p ($comm)"
+    echo "$stack" | head -80
+    [ "$comm" = snl ] || continue
+    ranks=$((ranks + 1))
+    echo "$stack" | grep -qE '\b(P?MPI_Init(_thread)?|P?MPI_Finalize|ompi_mpi_init|ompi_mpi_finalize)\b' \
+      && in_runtime=$((in_runtime + 1))
+  done
+  [ "$in_runtime" -eq "$ranks" ]
+}
+# watch_pid PID [WHAT]: waits for the background job PID and returns its
+# status; on a hang prints the report, kills the processes and returns 200
+# (inside Open MPI's runtime) or 201 (anywhere else).
+watch_pid() {
+  local pid=$1 what=${2:-} limit=${SNL_TEST_RUN_LIMIT:-240} t0=$SECONDS rc=0 report verdict=201
+  while kill -0 "$pid" 2> /dev/null && [ $((SECONDS - t0)) -lt "$limit" ]; do sleep 0.1; done
+  if ! kill -0 "$pid" 2> /dev/null; then
+    wait "$pid" || rc=$?
+    return $rc
+  fi
+  report=$T/hang.$pid
+  hang_report "$pid" > "$report" 2>&1 && verdict=200
+  kill -KILL $(descendants "$pid") "$pid" 2> /dev/null || true
+  wait "$pid" 2> /dev/null || true
+  cat "$report" >&2
+  echo "hung over $limit s (stacks above): $what" >&2
+  return $verdict
+}
+wait_watched() {  # wait_watched PID [WHAT]: watch_pid, failing the test on a hang
+  local rc=0
+  watch_pid "$@" || rc=$?
+  [ $rc -lt 200 ] || fail "hang: ${2:-pid $1}"
+  return $rc
+}
+run_watched() {  # run_watched cmd...: runs cmd (stdin kept); a hang fails the test
+  local attempt rc
+  for attempt in 1 2; do
+    "$@" <&0 &
+    rc=0; watch_pid $! "$*" || rc=$?
+    [ $rc -lt 200 ] && return $rc
+    if [ $rc = 200 ] && [ $attempt = 1 ]; then
+      echo "note: the hang is inside Open MPI's start-up or shut-down: run repeated once" >&2
+      continue
+    fi
+    fail "hang: $*"
+  done
+}
+mpi() { local np=$1; shift; run_watched "$MPIEXEC" "$MPIEXEC_NUMPROC_FLAG" "$np" --oversubscribe "$@"; }
+

@@ -32,7 +32,7 @@ pid=$!
 for _ in $(seq 400); do [ -f "$T/ck.h5" ] && break; sleep 0.05; done
 sleep 0.2
 kill -USR1 $pid
-wait $pid
+wait_watched $pid "the signalled run"
 rc=$?
 set -e
 [ $rc -eq 3 ] || fail "expected exit status 3 after SIGUSR1, got $rc"

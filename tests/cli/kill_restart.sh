@@ -41,7 +41,7 @@ for attempt in $(seq 40); do
     kill_run
     kills=$((kills + 1))
   else
-    wait $pid || { cat "$T/log.$attempt"; fail "run failed after $kills kills"; }
+    wait_watched $pid "attempt $attempt" || { cat "$T/log.$attempt"; fail "run failed after $kills kills"; }
   fi
   if [ $had_ckpt = 1 ]; then
     from=$(resumed_from "$T/log.$attempt")
@@ -75,7 +75,7 @@ kill_run
 [ -f "$T/out.h5" ] && fail "a killed run wrote its result"
 unset SNL_TEST_CHECKPOINT_DELAY
 start_run "$T/log.mm2"
-wait $pid || { cat "$T/log.mm2"; fail "the restart in $REF failed"; }
+wait_watched $pid "the restart in $REF" || { cat "$T/log.mm2"; fail "the restart in $REF failed"; }
 grep -Eq "^snl solve: resuming from .* at $REF iteration [1-9][0-9]* \(total iteration [0-9]+\)$" "$T/log.mm2" ||
   { cat "$T/log.mm2"; fail "the restart did not resume inside $REF"; }
 grep -q "^relaxation " "$T/log.mm2" && fail "the restart ran relaxation iterations again"

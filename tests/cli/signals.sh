@@ -36,7 +36,7 @@ grep -q '^relaxation ' "$T/log.term" || { cat "$T/log.term"; fail "the run did n
 [ -f "$T/term.h5" ] && fail "a checkpoint before any signal (none was asked for)"
 ranks=$(pgrep -P $pid) || fail "no rank processes under mpirun"
 for r in $ranks; do kill -TERM "$r"; done
-set +e; wait $pid; rc=$?; set -e
+set +e; wait_watched $pid "the run stopped by SIGTERM"; rc=$?; set -e
 [ $rc -eq 3 ] || { cat "$T/log.term"; fail "SIGTERM: exit status $rc, expected 3"; }
 [ -f "$T/term.h5" ] || fail "SIGTERM: no checkpoint written"
 [ -f "$T/stopped.h5" ] && fail "SIGTERM: a stopped run wrote its result"

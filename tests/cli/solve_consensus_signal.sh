@@ -24,7 +24,7 @@ for m in "newton-tree --dual splitting" "subgradient --max-iter 40" "incremental
     [ -n "$ranks" ] || fail "$m: the run ended before the signal"
     kill -s "$sig" $ranks
     rc=0
-    wait "$pid" || rc=$?
+    wait_watched "$pid" "$m: the signalled run" || rc=$?
     [ "$rc" -eq 3 ] || fail "$m: SIG$sig gave exit $rc, expected 3"
     [ -f "$T/ck.h5" ] || fail "$m: no checkpoint after SIG$sig"
     [ -f "$T/out.h5" ] && fail "$m: a result was written after SIG$sig"
