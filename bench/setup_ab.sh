@@ -1,0 +1,57 @@
+#!/usr/bin/env bash
+# The setup of two snl builds, run by turns on the same networks (A, B, A, B,
+# ...), so that a change of the setup code is measured against the code before
+# it on one machine at one time. Each run: snl solve NET --partition metis
+# --max-iter 1 --tol 0 on NP ranks; records its wall time, load, the setup
+# phases of the solve JSON, its per-rank memory, and whether its positions
+# equal the first A run's on that network, byte for byte.
+#   A=old/bin/snl B=build/bin/snl NETS="n1m.h5 n10m.h5" NPS="1 2" REPS=2 \
+#     WORK=/tmp/snl-ab bench/setup_ab.sh
+# NPS_BIG / BIG_FROM: rank counts for networks of at least BIG_FROM sensors
+# (default: NPS). One JSON line per run in $WORK/records.jsonl; one text line
+# per run on stdout.
+set -euo pipefail
+: "${A:?A: the first snl binary}" "${B:?B: the second snl binary}" "${NETS:?NETS: network files}"
+NPS=${NPS:-"1 2"}
+NPS_BIG=${NPS_BIG:-$NPS}
+BIG_FROM=${BIG_FROM:-5000000}
+REPS=${REPS:-2}
+WORK=${WORK:-/tmp/snl-ab}
+PY=/usr/bin/python3
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
+mkdir -p "$WORK"
+rec="$WORK/records.jsonl"
+echo "# $(date -u +%FT%TZ) A=$A B=$B $(nproc) cores, load: $(cut -d' ' -f1-3 /proc/loadavg)"
+for net in $NETS; do
+  n=$("$A" info "$net" | sed -n 's/.*sensors n = \([0-9]*\).*/\1/p')
+  nps=$NPS
+  [ "$n" -ge "$BIG_FROM" ] && nps=$NPS_BIG
+  ref=""
+  for rep in $(seq "$REPS"); do
+    for np in $nps; do
+      for which in A B; do
+        bin=${!which}
+        out="$WORK/r_${n}_${np}_${which}${rep}"
+        /usr/bin/time -f "%e" -o "$out.time" mpirun -np "$np" --oversubscribe "$bin" solve "$net" -o "$out.h5" \
+          --partition metis --max-iter 1 --tol 0 -q --json "$out.json"
+        [ -n "$ref" ] || ref="$out.h5"
+        $PY - "$out" "$ref" "$n" "$np" "$which" "$rep" "$(cat "$out.time")" "$(cut -d' ' -f1 /proc/loadavg)" >> "$rec" <<'PYEOF'
+import json, sys, h5py
+out, ref, n, np_, which, rep, wall, load = sys.argv[1:]
+j = json.load(open(out + ".json"))
+same = h5py.File(out + ".h5", "r")["positions"][()].tobytes() == h5py.File(ref, "r")["positions"][()].tobytes()
+r = {"n": int(n), "ranks": int(np_), "build": which, "rep": int(rep), "wall": float(wall), "load1": float(load),
+     "positions_equal_first_A": same}
+r.update({k: v for k, v in j.items() if k.startswith("setup_") or k == "peak_rss_bytes_per_rank"})
+print(json.dumps(r))
+PYEOF
+        $PY -c "
+import json, sys
+r = [json.loads(l) for l in open(sys.argv[1])][-1]
+g = lambda k: r.get('setup_graph.' + k + '_seconds', 0)
+print(f\"n={r['n']} np={r['ranks']} {r['build']}{r['rep']} load {r['load1']}: wall {r['wall']:.2f} s, setup {r['setup_seconds']:.2f}, graph {r['setup_graph_seconds']:.2f} (exchange {g('exchange'):.2f}, lists {g('lists'):.2f}, order {g('order'):.2f}, csr {g('csr'):.2f}), build bytes/rank {max(r['setup_graph_build_bytes_per_rank'])}, peak RSS/rank {max(r['peak_rss_bytes_per_rank'])}, same positions {r['positions_equal_first_A']}\")
+" "$rec"
+      done
+    done
+  done
+done
