@@ -8,7 +8,10 @@
 //   build/bench/snl_micro [--benchmark_filter=...]          (1 rank)
 //   mpirun -np 2 build/bench/snl_micro --benchmark_filter=Halo (2 ranks)
 // SNL_MICRO_SENSORS sets n (default 1,000,000: well out of cache),
-// SNL_MICRO_DIM the dimension (default 2).
+// SNL_MICRO_DIM the dimension (default 2), SNL_MICRO_NETWORK the network:
+// "default" (the generator's defaults: degree 16 in 2D, 24 in 3D, corners
+// plus 1% anchors, sigma 0.01 in the reference square's units) or "degree6"
+// (the older records': degree 6, sigma 0.01, 4 corner anchors, unit square).
 // Iteration counts are fixed so that every rank runs the same collectives.
 #include <benchmark/benchmark.h>
 #include <mpi.h>
@@ -17,6 +20,7 @@
 #include <cstdlib>
 #include <map>
 #include <memory>
+#include <string>
 
 #include "snl/problem/generate.hpp"
 #include "snl/problem/metrics.hpp"
@@ -48,8 +52,14 @@ LocalizationProblem& problem(bool rcm) {
       GenerateOptions opt;
       opt.sensors = bench_sensors();
       opt.dim = bench_dim();
-      opt.avg_degree = 6;
-      opt.sigma = 0.01;
+      const char* net = std::getenv("SNL_MICRO_NETWORK");
+      if (net && std::string(net) == "degree6") {
+        opt.avg_degree = 6;
+        opt.sigma = 0.01;
+        opt.num_random_anchors = 0;
+        opt.side = 1.0;
+      }
+      // The kernels' cost does not depend on localizability: no redraws.
       opt.localizable = GenerateOptions::Localizable::kNo;
       return generate_network(opt);
     }();

@@ -1,0 +1,17 @@
+#!/bin/bash
+# 1M sensors, one rank: one relaxation and one MM iteration (RCM order), 2D and
+# 3D, on the generator's default network (degree 16 in 2D, 24 in 3D), with the
+# AVX2 kernels (4 nodes per register) and the scalar twins, three alternated
+# repetitions. Needs the benchmark build (-DSNL_BUILD_BENCH=ON) in BUILD
+# (default build-bench). AVX-512 rows need a CPU that has it (not this host).
+#   bash docs/data/perf/results-2026-12-02-default-micro.sh > docs/data/perf/results-2026-12-02-default-micro.txt
+set -euo pipefail
+cd "$(dirname "$0")/../../.."
+BUILD=${BUILD:-build-bench}
+echo "== $(date -u +%FT%TZ) $(grep -m1 'model name' /proc/cpuinfo) | flags: $(grep -m1 -o 'avx512f' /proc/cpuinfo || echo 'no avx512f')"
+for dim in 2 3; do for rep in 1 2 3; do for simd in avx2 0; do
+  echo -n "dim=$dim rep=$rep SNL_SIMD=$simd load=$(cut -d' ' -f1 /proc/loadavg): "
+  SNL_SIMD=$simd SNL_MICRO_NETWORK=default SNL_MICRO_DIM=$dim SNL_MICRO_SENSORS=1000000 \
+    "$BUILD"/bin/snl_micro --benchmark_filter='BM_Iteration<k.*>/1' 2>&1 | grep -E "^BM" | awk '{printf "%s %s ms  ", $1, $2}'
+  echo
+done; done; done
