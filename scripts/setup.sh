@@ -2,8 +2,6 @@
 # Installs snl's build and run dependencies (Debian 12 packages) and builds snl.
 # Idempotent: quiet and fast when everything is already there.
 #   scripts/setup.sh [BUILD_DIR] [extra cmake args...]
-# SNL_SETUP_BUILD=0: install and configure only (scripts/test.sh then builds
-# two trees side by side).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 BUILD_DIR=${1:-build}
@@ -35,4 +33,4 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 if [ ! -f "$BUILD_DIR/build.ninja" ]; then
   cmake -S . -B "$BUILD_DIR" -G Ninja -DCMAKE_BUILD_TYPE=Release "$@" >/dev/null
 fi
-[ "${SNL_SETUP_BUILD:-1}" = 0 ] || cmake --build "$BUILD_DIR" -j "$(nproc)"
+cmake --build "$BUILD_DIR" -j "$(nproc)"

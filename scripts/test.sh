@@ -10,37 +10,30 @@ export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_
 JOBS=${SNL_CTEST_JOBS:-$((2 * $(nproc)))}
 SANITIZE=$([ "${SNL_SKIP_SANITIZE:-0}" = 1 ] && echo 0 || echo 1)
 
-# Both trees compile first, side by side, and the tests then run with the
-# cores to themselves: a compile beside the tests slows them down (an MPI rank
-# that waits yields its core, and a compiler then holds it for a time slice):
-# the Release suite took 645 s beside the sanitizer build, 376 s alone.
-SNL_SETUP_BUILD=0 scripts/setup.sh build   # installs what is missing, configures
-dirs=(build)
+scripts/setup.sh build   # installs what is missing, then builds
+
+# The sanitizer build compiles at low priority while the Release tests run: it
+# takes the cores they leave idle while they wait.
+asan_pid=""
 if [ "$SANITIZE" = 1 ]; then
   # -O1 with line tables (-g1): what the sanitizers' documentation recommends,
   # enough for their stack traces, and it compiles in about two thirds of -O2's time.
-  SNL_SETUP_BUILD=0 scripts/setup.sh build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-    "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" -DSNL_SANITIZE=ON
-  dirs+=(build-asan)
+  mkdir -p build-asan
+  setsid nice -n 15 scripts/setup.sh build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" -DSNL_SANITIZE=ON > build-asan/setup.log 2>&1 &
+  asan_pid=$!
+  # A failed Release run ends the script: stop the whole build with it.
+  trap '[ -z "$asan_pid" ] || kill -- -"$asan_pid" 2> /dev/null || true' EXIT
 fi
-pids=()
-for d in "${dirs[@]}"; do
-  setsid cmake --build "$d" -j "$(nproc)" > "$d/build.log" 2>&1 &
-  pids+=($!)
-done
-# A failed build ends the script: stop the other one with it.
-trap 'for p in "${pids[@]}"; do kill -- -"$p" 2> /dev/null || true; done' EXIT
-for i in "${!dirs[@]}"; do
-  wait "${pids[$i]}" || { tail -n 50 "${dirs[$i]}/build.log"; echo "${dirs[$i]}: build failed"; exit 1; }
-  tail -n 1 "${dirs[$i]}/build.log"
-done
-trap - EXIT
 
 echo "== Release tests =="
 (cd build && ctest --output-on-failure -j "$JOBS")
 
 if [ "$SANITIZE" = 1 ]; then
-  echo "== sanitizer build (ASan + UBSan) tests =="
+  echo "== sanitizer build (ASan + UBSan) =="
+  wait "$asan_pid" || { tail -n 50 build-asan/setup.log; echo "sanitizer build failed"; exit 1; }
+  asan_pid=""
+  tail -n 1 build-asan/setup.log
   # Open MPI's own allocations are reported as leaks; memory errors and UB are what we check.
   export ASAN_OPTIONS=detect_leaks=0:abort_on_error=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
   # Under the sanitizers run every unit test, the MPI tests on 1 and 2 ranks

@@ -2,7 +2,7 @@
 # The batch scripts of jobs/ under a real (private, one-node) Slurm:
 #  a) jobs/solve.sbatch on 2 tasks (mpirun inside the allocation, and srun
 #     --mpi=pmix) gives the positions of a direct mpirun -np 2 snl solve;
-#  b) a job with --time=1 --signal=B:USR1@55 on a solve slowed to over 40 s
+#  b) a job with --time=2 --signal=B:USR1@110 on a solve slowed to 90 s
 #     by a test hook is signalled before its time limit, checkpoints,
 #     requeues itself and resumes (maybe several times) until it finishes with
 #     the positions of an uninterrupted run; every resumed run starts at the
@@ -106,17 +106,19 @@ done
 step "c) experiment_array.sbatch: 3 tasks == direct runs with their seeds; merge checked"
 
 # ---- b) time limit: signal, checkpoint, requeue, resume.
-# Slurm tests time limits every 30 s, so --time=1 --signal=B:USR1@55 reaches
-# the batch shell 5-35 s into every run. The job's 2 x MAXITER iterations sleep
-# DELAY s each (snl's test hook SNL_TEST_ITERATION_DELAY), so every run would
-# take over 40 s whatever the machine's load: it is always stopped at least
-# once, and how far it gets before each signal varies.
+# --time=2 --signal=B:USR1@110: the signal is due 10 s into every run, and
+# Slurm sends it at its next periodic check of time limits (up to 60 s later,
+# says sbatch's documentation; a run of 43 s once went unsignalled). The
+# job's 2 x MAXITER iterations sleep DELAY s each (snl's test hook
+# SNL_TEST_ITERATION_DELAY), so a run would take 90 s whatever the machine's
+# load, under the 120 s limit: it is always stopped at least once, and how far
+# it gets before each signal varies.
 MAXITER=1000
-DELAY=0.021
+DELAY=0.045
 mpirun -np 2 "$SNL" solve "$NET" -o ref.h5 --algorithm pipeline --max-iter "$MAXITER" --tol 0 -q ||
   fail "reference run failed"
 step "b) uninterrupted reference run (--max-iter $MAXITER) done"
-id=$(submit_wait 600 --ntasks=2 --time=1 --signal=B:USR1@55 -o b.log \
+id=$(submit_wait 900 --ntasks=2 --time=2 --signal=B:USR1@110 -o b.log \
   --export="ALL,SNL=$SNL,NET=$NET,OUT=$T/b.h5,MAXITER=$MAXITER,TOL=0,SNL_TEST_ITERATION_DELAY=$DELAY" \
   "$SRC/jobs/solve.sbatch") || exit 1
 restarts=$(job_field "$id" Restarts)
