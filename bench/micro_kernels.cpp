@@ -36,6 +36,12 @@ GlobalId bench_sensors() {
   return s ? std::atoll(s) : 1000000;
 }
 
+// "default" or "degree6" (see the header); anything else is refused in main.
+std::string bench_network() {
+  const char* s = std::getenv("SNL_MICRO_NETWORK");
+  return s ? s : "default";
+}
+
 int bench_dim() {
   const char* s = std::getenv("SNL_MICRO_DIM");
   return s ? std::atoi(s) : 2;
@@ -52,8 +58,7 @@ LocalizationProblem& problem(bool rcm) {
       GenerateOptions opt;
       opt.sensors = bench_sensors();
       opt.dim = bench_dim();
-      const char* net = std::getenv("SNL_MICRO_NETWORK");
-      if (net && std::string(net) == "degree6") {
+      if (bench_network() == "degree6") {
         opt.avg_degree = 6;
         opt.sigma = 0.01;
         opt.num_random_anchors = 0;
@@ -196,8 +201,12 @@ int main(int argc, char** argv) {
   MPI_Comm_rank(MPI_COMM_WORLD, &rank);
   benchmark::Initialize(&argc, argv);
   // The same environment on every rank, so every rank takes this exit.
-  if (bench_sensors() < 100 || (bench_dim() != 2 && bench_dim() != 3)) {
-    if (rank == 0) std::fprintf(stderr, "snl_micro: SNL_MICRO_SENSORS must be >= 100 and SNL_MICRO_DIM 2 or 3\n");
+  if (bench_sensors() < 100 || (bench_dim() != 2 && bench_dim() != 3) ||
+      (bench_network() != "default" && bench_network() != "degree6")) {
+    if (rank == 0)
+      std::fprintf(stderr,
+                   "snl_micro: SNL_MICRO_SENSORS must be >= 100, SNL_MICRO_DIM 2 or 3, "
+                   "SNL_MICRO_NETWORK default or degree6\n");
     MPI_Finalize();
     return 2;
   }

@@ -35,22 +35,22 @@ for net in $NETS; do
         /usr/bin/time -f "%e" -o "$out.time" mpirun -np "$np" --oversubscribe "$bin" solve "$net" -o "$out.h5" \
           --partition metis --max-iter 1 --tol 0 -q --json "$out.json"
         [ -n "$ref" ] || ref="$out.h5"
-        $PY - "$out" "$ref" "$n" "$np" "$which" "$rep" "$(cat "$out.time")" "$(cut -d' ' -f1 /proc/loadavg)" >> "$rec" <<'PYEOF'
+        $PY - "$out" "$ref" "$n" "$np" "$which" "$rep" "$(cat "$out.time")" "$(cut -d' ' -f1 /proc/loadavg)" "$rec" <<'PYEOF'
 import json, sys, h5py
-out, ref, n, np_, which, rep, wall, load = sys.argv[1:]
+out, ref, n, np_, which, rep, wall, load, rec = sys.argv[1:]
 j = json.load(open(out + ".json"))
 same = h5py.File(out + ".h5", "r")["positions"][()].tobytes() == h5py.File(ref, "r")["positions"][()].tobytes()
 r = {"n": int(n), "ranks": int(np_), "build": which, "rep": int(rep), "wall": float(wall), "load1": float(load),
      "positions_equal_first_A": same}
 r.update({k: v for k, v in j.items() if k.startswith("setup_") or k == "peak_rss_bytes_per_rank"})
-print(json.dumps(r))
+with open(rec, "a") as f:
+    f.write(json.dumps(r) + "\n")
+g = lambda k: r.get("setup_graph." + k + "_seconds", 0)
+print(f"n={n} np={np_} {which}{rep} load {load}: wall {r['wall']:.2f} s, setup {r['setup_seconds']:.2f}, "
+      f"graph {r['setup_graph_seconds']:.2f} (exchange {g('exchange'):.2f}, lists {g('lists'):.2f}, "
+      f"order {g('order'):.2f}, csr {g('csr'):.2f}), build bytes/rank {max(r['setup_graph_build_bytes_per_rank'])}, "
+      f"peak RSS/rank {max(r['peak_rss_bytes_per_rank'])}, same positions {same}")
 PYEOF
-        $PY -c "
-import json, sys
-r = [json.loads(l) for l in open(sys.argv[1])][-1]
-g = lambda k: r.get('setup_graph.' + k + '_seconds', 0)
-print(f\"n={r['n']} np={r['ranks']} {r['build']}{r['rep']} load {r['load1']}: wall {r['wall']:.2f} s, setup {r['setup_seconds']:.2f}, graph {r['setup_graph_seconds']:.2f} (exchange {g('exchange'):.2f}, lists {g('lists'):.2f}, order {g('order'):.2f}, csr {g('csr'):.2f}), build bytes/rank {max(r['setup_graph_build_bytes_per_rank'])}, peak RSS/rank {max(r['peak_rss_bytes_per_rank'])}, same positions {r['positions_equal_first_A']}\")
-" "$rec"
       done
     done
   done
