@@ -1,6 +1,7 @@
 // Google Benchmark micro-benchmarks of the iteration kernels, through the
 // public API: the gradient of f_hat (003, Alg. 1), one MM iteration (000,
-// Alg. 1; halo and norms included), one relaxation iteration, one pass of S
+// Alg. 1; halo and norms included), one mm-accel iteration (with its costs),
+// one relaxation iteration, one pass of S
 // iterations with temporal blocking, and the halo pack/exchange/unpack. Each
 // kernel runs with the RCM local order and with the global-id order (arg 1 =
 // rcm, 0 = gid), to measure the locality effect (BM_Pass: arg = S, RCM).
@@ -118,6 +119,7 @@ void BM_Iteration(benchmark::State& st) {
   report(st, prob);
 }
 constexpr char kMM[] = "mm";
+constexpr char kMMAccel[] = "mm-accel";
 constexpr char kRelax[] = "relaxation";
 
 // One pass of S = range(0) iterations with temporal blocking (RCM order):
@@ -181,6 +183,7 @@ void BM_HaloExchange(benchmark::State& st) {
 BENCHMARK(BM_RelaxedGradient)->Arg(1)->Arg(0)->Iterations(30)->Unit(benchmark::kMillisecond);
 BENCHMARK_TEMPLATE(BM_Iteration, kRelax)->Arg(1)->Arg(0)->Iterations(30)->Unit(benchmark::kMillisecond);
 BENCHMARK_TEMPLATE(BM_Iteration, kMM)->Arg(1)->Arg(0)->Iterations(30)->Unit(benchmark::kMillisecond);
+BENCHMARK_TEMPLATE(BM_Iteration, kMMAccel)->Arg(1)->Arg(0)->Iterations(30)->Unit(benchmark::kMillisecond);
 BENCHMARK_TEMPLATE(BM_IterationAfter, kRelax)->Arg(100)->Arg(300)->Arg(1000)->Iterations(30)->Unit(benchmark::kMillisecond);
 BENCHMARK_TEMPLATE(BM_IterationAfter, kMM)->Arg(300)->Iterations(30)->Unit(benchmark::kMillisecond);
 BENCHMARK_TEMPLATE(BM_Pass, kRelax)->Arg(1)->Arg(4)->Arg(8)->Iterations(10)->Unit(benchmark::kMillisecond);

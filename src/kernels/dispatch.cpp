@@ -101,4 +101,12 @@ void mm_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_
   run_chunks<&KernelTable::mm>(prob, nl, c0, c1, s);
 }
 
+unsigned mm_cost_chunk(const NodeLanes& nl, int p, std::int64_t c, const double* x, const double* y, double* F,
+                       double* f) {
+#ifdef SNL_HAVE_AVX2_PATH
+  if (g_level > 0 && p >= 2 && nl.count[c] == nl.lanes) return mm_cost_chunk_avx2(nl, p, c, x, y, F, f);
+#endif
+  return mm_cost_chunk_scalar(nl, p, c, x, y, F, f);
+}
+
 }  // namespace snl::detail

@@ -215,4 +215,16 @@ struct MMStep {
 void mm_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
                const MMStep& s);
 
+/// mm-accel's acceptance costs (src/solvers/mm_accel.cpp) on chunk c: per
+/// register lane L, the sums over its node's forward slots (MM's
+/// orientation, so that each edge counts once over all ranks), in slot
+/// order, of |x_v - x_u - y_e|^2 into F[L] and of (|x_v - x_u| - rho_e)^2
+/// into f[L]: the edge terms of 000's surrogate (eq. 2) and of the ML cost,
+/// before their factor 1/2. F and f hold C zeros on entry. Returns the lanes
+/// with at least one forward slot. A full chunk (p = 2, 3) takes the AVX2
+/// path where simd_enabled(), for 4 and 8 lanes alike; every lane equals the
+/// scalar twin bit for bit.
+unsigned mm_cost_chunk(const NodeLanes& nl, int p, std::int64_t c, const double* x, const double* y, double* F,
+                       double* f);
+
 }  // namespace snl::detail

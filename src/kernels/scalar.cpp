@@ -114,4 +114,44 @@ void add_anchor_disk_terms(const LocalizationProblem& prob, LocalId v, const dou
   }
 }
 
+namespace {
+
+template <int P>
+unsigned mm_cost_chunk_p(const NodeLanes& nl, std::int64_t c, const double* x, const double* y, double* F,
+                         double* f) {
+  const int C = nl.lanes;
+  unsigned any = 0;
+  for (std::int64_t g = nl.group_off[c]; g < nl.group_off[c + 1]; ++g) {
+    const unsigned mask = nl.real[g] & nl.fwd[g];
+    for (int L = 0; L < C; ++L) {
+      if (!((mask >> L) & 1)) continue;
+      const int q = NodeLanes::lane_node(L, C);
+      const double* xv = x + std::size_t(nl.first[c] + q) * P;
+      const double* xu = x + std::size_t(nl.adj[g * C + q]) * P;
+      double s = 0, z2 = 0;
+      for (int k = 0; k < P; ++k) {
+        const double z = xv[k] - xu[k], r = z - y[std::size_t(g * P + k) * C + L];
+        s += r * r;
+        z2 += z * z;
+      }
+      const double m = std::sqrt(z2) - nl.rho[g * C + L];
+      F[L] += s;
+      f[L] += m * m;
+    }
+    any |= mask;
+  }
+  return any;
+}
+
+}  // namespace
+
+unsigned mm_cost_chunk_scalar(const NodeLanes& nl, int p, std::int64_t c, const double* x, const double* y,
+                              double* F, double* f) {
+  switch (p) {
+    case 1: return mm_cost_chunk_p<1>(nl, c, x, y, F, f);
+    case 2: return mm_cost_chunk_p<2>(nl, c, x, y, F, f);
+    default: return mm_cost_chunk_p<3>(nl, c, x, y, F, f);
+  }
+}
+
 }  // namespace snl::detail

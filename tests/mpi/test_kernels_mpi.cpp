@@ -246,6 +246,64 @@ TEST_P(KernelsByDim, SimdMMStepEqualsScalarBitForBit) {
   for (int c = 1; c < dim; ++c) EXPECT_EQ(ya[nl.at(10, 0, dim, c)], 0.0);
 }
 
+// mm-accel's acceptance costs per chunk: each lane holds its node's sums over
+// its forward slots in slot order (checked against a plain loop over the CSR),
+// and the AVX2 path gives the scalar twin's bits, the awkward rows included.
+TEST_P(KernelsByDim, MMCostChunkSumsEachNodesForwardSlotsInOrder) {
+  std::mt19937_64 gen(13);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const auto x = awkward_rows(prob, 5);
+  std::vector<double> y(std::size_t(nl.groups()) * nl.lanes * dim);
+  for (auto& v : y) v = u(gen);
+  const auto& g = prob.graph();
+  const auto& off = g.offsets();
+  const bool simd = have_simd();
+  std::int64_t full = 0, counted = 0;
+  for (std::int64_t c = 0; c < nl.size(); ++c) {
+    double F[2][detail::kMaxLanes] = {}, f[2][detail::kMaxLanes] = {};
+    unsigned any[2] = {0, 0};
+    for (int path = 0; path < (simd ? 2 : 1); ++path) {
+      const bool had = detail::set_simd_enabled(path == 1);
+      any[path] = detail::mm_cost_chunk(nl, dim, c, x.data(), y.data(), F[path], f[path]);
+      detail::set_simd_enabled(had);
+    }
+    full += nl.count[c] == nl.lanes;
+    for (int q = 0; q < nl.count[c]; ++q) {
+      const LocalId v = nl.first[c] + q;
+      const int L = detail::NodeLanes::lane_of_node(q, nl.lanes);
+      double eF = 0, ef = 0;
+      bool fwd = false;
+      for (auto e = off[v]; e < off[v + 1]; ++e) {
+        if (!(g.global_id(v) < g.global_id(g.adjacency()[e]))) continue;
+        fwd = true;
+        double s = 0, z2 = 0;
+        for (int k = 0; k < dim; ++k) {
+          const double z = x[std::size_t(v) * dim + k] - x[std::size_t(g.adjacency()[e]) * dim + k];
+          const double r = z - y[nl.at(v, e - off[v], dim, k)];
+          s += r * r;
+          z2 += z * z;
+        }
+        const double m = std::sqrt(z2) - g.edge_value(e);
+        eF += s;
+        ef += m * m;
+      }
+      EXPECT_EQ((any[0] >> L) & 1, fwd ? 1u : 0u) << "node " << v;
+      EXPECT_TRUE(same_bits(F[0][L], eF)) << "node " << v << ": " << F[0][L] << " vs " << eF;
+      EXPECT_TRUE(same_bits(f[0][L], ef)) << "node " << v << ": " << f[0][L] << " vs " << ef;
+      counted += fwd;
+    }
+    if (simd) {
+      EXPECT_EQ(any[1], any[0]) << "chunk " << c;
+      for (int L = 0; L < nl.lanes; ++L) {
+        EXPECT_TRUE(same_bits(F[1][L], F[0][L])) << "chunk " << c << " lane " << L;
+        EXPECT_TRUE(same_bits(f[1][L], f[0][L])) << "chunk " << c << " lane " << L;
+      }
+    }
+  }
+  EXPECT_GT(full, 0);
+  EXPECT_GT(3 * counted, prob.num_owned());
+}
+
 // One call over both parts (as mm-accel makes) steps each node once: the
 // same bits as part by part. The interior's partial last chunk must not go
 // through the SIMD kernel, whose extra lanes would step the next nodes'
