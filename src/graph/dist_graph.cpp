@@ -312,28 +312,25 @@ GlobalId route_edges(MPI_Comm comm, const OwnerDirectory& dir, const std::vector
   std::vector<double> at_b_vals;
   send_records(comm, std::move(half), std::move(half_vals), width,
                [&](std::size_t k) { return block_owner(n, size, half[k].b); }, at_b, at_b_vals);
-  std::vector<EdgeRec> full(at_b.size());
+  // To the owner of a, and to the owner of b if it is another rank: the cut
+  // edges are counted first, so that their second copies go straight after
+  // the first ones (no reallocation of the whole array).
   GlobalId cut = 0;
-  for (std::size_t k = 0; k < at_b.size(); ++k) {
+  for (const auto& h : at_b) cut += h.oa != dir.local(h.b).owner;
+  const std::size_t n_first = at_b.size();
+  std::vector<EdgeRec> full(n_first + static_cast<std::size_t>(cut));
+  at_b_vals.resize(full.size() * width);
+  for (std::size_t k = 0, d = n_first; k < n_first; ++k) {
     const auto& h = at_b[k];
     const auto& s = dir.local(h.b);
     full[k] = {h.a, h.b, h.oa, h.ia, s.owner, s.index};
-    cut += h.oa != s.owner;
+    if (h.oa != s.owner) {
+      full[d] = full[k];
+      std::copy(at_b_vals.begin() + k * width, at_b_vals.begin() + (k + 1) * width, at_b_vals.begin() + d * width);
+      ++d;
+    }
   }
   at_b = {};
-  // To the owner of a, and to the owner of b if it is another rank.
-  std::vector<EdgeRec> dup;
-  std::vector<double> dup_vals;
-  for (std::size_t k = 0; k < full.size(); ++k)
-    if (full[k].ob != full[k].oa) {
-      dup.push_back(full[k]);
-      dup_vals.insert(dup_vals.end(), at_b_vals.begin() + k * width, at_b_vals.begin() + (k + 1) * width);
-    }
-  const std::size_t n_first = full.size();
-  full.insert(full.end(), dup.begin(), dup.end());
-  at_b_vals.insert(at_b_vals.end(), dup_vals.begin(), dup_vals.end());
-  dup = {};
-  dup_vals = {};
   send_records(comm, std::move(full), std::move(at_b_vals), width,
                [&](std::size_t k) { return k < n_first ? full[k].oa : full[k].ob; }, mine, mine_vals);
   return cut;
