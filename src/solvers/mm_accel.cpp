@@ -23,7 +23,8 @@
 //
 // One iteration is one kernel pass and one halo exchange (the new x rows),
 // so one message per sensor as for MM; a rejected iteration counts as one.
-// F and f are summed exactly (detail::ExactSum) and the extrapolation is the same
+// F and f are per-node sums in a fixed order, added exactly (detail::ExactSum;
+// see add_terms), and the extrapolation is the same
 // arithmetic on every copy of a row or edge variable, so the iterates are
 // bit-identical for any number of ranks. Parameter-free: L is MM's (eq. 9).
 #include <algorithm>
