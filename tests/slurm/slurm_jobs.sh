@@ -2,7 +2,7 @@
 # The batch scripts of jobs/ under a real (private, one-node) Slurm:
 #  a) jobs/solve.sbatch on 2 tasks (mpirun inside the allocation, and srun
 #     --mpi=pmix) gives the positions of a direct mpirun -np 2 snl solve;
-#  b) a job with --time=2 --signal=B:USR1@110 on a solve slowed to 90 s
+#  b) a job with --time=2 --signal=B:USR1@40 on a solve slowed to 90 s
 #     by a test hook is signalled before its time limit, checkpoints,
 #     requeues itself and resumes (maybe several times) until it finishes with
 #     the positions of an uninterrupted run; every resumed run starts at the
@@ -106,19 +106,20 @@ done
 step "c) experiment_array.sbatch: 3 tasks == direct runs with their seeds; merge checked"
 
 # ---- b) time limit: signal, checkpoint, requeue, resume.
-# --time=2 --signal=B:USR1@110: the signal is due 10 s into every run, and
-# Slurm sends it at its next periodic check of time limits (up to 60 s later,
-# says sbatch's documentation; a run of 43 s once went unsignalled). The
-# job's 2 x MAXITER iterations sleep DELAY s each (snl's test hook
-# SNL_TEST_ITERATION_DELAY), so a run would take 90 s whatever the machine's
-# load, under the 120 s limit: it is always stopped at least once, and how far
-# it gets before each signal varies.
+# --time=2 --signal=B:USR1@40: the signal is due 80 s into every run, and
+# Slurm may send it up to 60 s early (sbatch(1); at its periodic check of time
+# limits), so it comes 20-80 s in: after the solve has started (with @110 it
+# came at once and killed the batch shell before its trap, or was lost while
+# the job started). The job's 2 x MAXITER iterations sleep DELAY s each (snl's
+# test hook SNL_TEST_ITERATION_DELAY), so a run would take 90 s whatever the
+# machine's load, under the 120 s limit: the first run is always stopped, and
+# how far each run gets before its signal varies.
 MAXITER=1000
 DELAY=0.045
 mpirun -np 2 "$SNL" solve "$NET" -o ref.h5 --algorithm pipeline --max-iter "$MAXITER" --tol 0 -q ||
   fail "reference run failed"
 step "b) uninterrupted reference run (--max-iter $MAXITER) done"
-id=$(submit_wait 900 --ntasks=2 --time=2 --signal=B:USR1@110 -o b.log \
+id=$(submit_wait 900 --ntasks=2 --time=2 --signal=B:USR1@40 -o b.log \
   --export="ALL,SNL=$SNL,NET=$NET,OUT=$T/b.h5,MAXITER=$MAXITER,TOL=0,SNL_TEST_ITERATION_DELAY=$DELAY" \
   "$SRC/jobs/solve.sbatch") || exit 1
 restarts=$(job_field "$id" Restarts)
