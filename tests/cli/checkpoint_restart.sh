@@ -14,19 +14,19 @@ source "$(dirname "$0")/common.bash"
 # signal checkpoints fall on pass ends, and its positions equal pipeline's.
 for case in async pipeline pipeline4 bb mm3 mm-accel mm; do  # mm last: the refusals below use its checkpoint
   alg=${case%[34]}
-  ARGS=(--max-iter 1000 --tol 0 -q)
+  ARGS=(--max-iter 400 --tol 0 -q)
   NET="$T/net.h5"
   EVERY=50
-  if [ $case = async ]; then ARGS=(--max-iter 300 --tol 0 -q); NET="$T/small.h5"; EVERY=10; fi
+  if [ $case = async ]; then ARGS=(--max-iter 300 --tol 0 -q); NET="$T/small.h5"; EVERY=20; fi
   if [ $case = mm3 ]; then NET="$T/net3.h5"; fi
-  if [ $case = mm-accel ]; then ARGS=(--max-iter 1000 --tol 0 -q); fi  # z(k), z(k-1) and t in the checkpoint
+  if [ $case = mm-accel ]; then ARGS=(--max-iter 400 --tol 0 -q); fi  # z(k), z(k-1) and t in the checkpoint
   if [ $case = pipeline4 ]; then ARGS+=(--temporal-block 4); EVERY=40; fi
   mpi 2 "$SNL" solve "$NET" -o "$T/ref.$case.h5" --algorithm $alg "${ARGS[@]}"
   # Stop a run with SIGUSR1 after it has written some checkpoints.
   rm -f "$T/ck.h5"
   set +e
   # Slow checkpoint writes (test hook) keep the run alive until the signal lands.
-  SNL_TEST_CHECKPOINT_DELAY=0.1 \
+  SNL_TEST_CHECKPOINT_DELAY=0.25 \
   "$MPIEXEC" "$MPIEXEC_NUMPROC_FLAG" 2 --oversubscribe -x SNL_TEST_CHECKPOINT_DELAY "$SNL" solve "$NET" -o "$T/stopped.h5" \
     --algorithm $alg "${ARGS[@]}" --checkpoint "$T/ck.h5" --checkpoint-every $EVERY &
   pid=$!
@@ -46,7 +46,7 @@ for case in async pipeline pipeline4 bb mm3 mm-accel mm; do  # mm last: the refu
   done
 done
 h5diff "$T/ref.pipeline.h5" "$T/ref.pipeline4.h5" /positions || fail "--temporal-block 4 changed the positions"
-ARGS=(--max-iter 1000 --tol 0 -q)
+ARGS=(--max-iter 400 --tol 0 -q)
 # Refusals: another network, other options, damaged files.
 expect_error() {  # expect_error PATTERN cmd...
   local pat=$1; shift
