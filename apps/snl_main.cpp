@@ -104,7 +104,7 @@ void add_solve(CLI::App& app, Commands& c) {
     const Info* a = snl::find_algorithm(c.solve.solver.algorithm);
     if (!stop->count() && a && a->admm) c.solve.solver.stop = "papers";
   });
-  s->add_option("--refine", c.solve.solver.refine, "the pipeline's refinement: auto|mm-accel|mm (auto: mm-accel for the plain model, mm under --weights/--loss)")->capture_default_str();
+  s->add_option("--refine", c.solve.solver.refine, "the pipeline's refinement: auto|mm-accel|mm (auto: mm-accel)")->capture_default_str();
   s->add_option("--grad-tol", c.solve.solver.grad_tol,
                 "gradient norm tolerance (0: off; " + honoured_by(&Info::gradient_stop) + ")")
       ->capture_default_str();

@@ -173,7 +173,7 @@ void report_restart(const SolveCommand& cmd, const LoadedProblem& lp, bool talk,
   const H5File f(cmd.restart, comm, H5File::Mode::kRead);
   const CheckpointHeader h = read_checkpoint_header(
       f, lp.fingerprint,
-      checkpoint_options(cmd.solver.resolved_for(lp.prob->has_sensor_sigmas() || lp.prob->has_anchor_sigmas())));
+      checkpoint_options(cmd.solver.resolved()));
   if (talk)
     std::fprintf(stderr, "snl solve: resuming from %s at %s iteration %lld (total iteration %lld)\n",
                  cmd.restart.c_str(), h.phase_algorithm.c_str(), static_cast<long long>(h.phase_iteration),

@@ -27,6 +27,14 @@
 // see add_terms), and the extrapolation is the same
 // arithmetic on every copy of a row or edge variable, so the iterates are
 // bit-identical for any number of ranks. Parameter-free: L is MM's (eq. 9).
+//
+// Under a measurement model (weights, Huber; weights.hpp) the step is
+// ModelMM's (weighted.cpp: per-node steps from a diagonal majorizer of the
+// quadratic majorizer at the current point), F is its surrogate Phi and f the
+// weighted / Huber ML cost; the argument is unchanged: a plain step from a
+// feasible point with (y, w) at their best values lowers Phi, and there
+// Phi = f. Two cores, one algorithm: LaneCore (the SIMD kernels, plain l2)
+// and ModelCore (model_mm.hpp, one node at a time).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -36,6 +44,7 @@
 #include "kernels/kernels.hpp"
 #include "solvers/algorithm_util.hpp"
 #include "solvers/methods.hpp"
+#include "solvers/model_mm.hpp"
 
 namespace snl {
 
@@ -43,12 +52,150 @@ namespace {
 
 using detail::project_sphere;
 
+// Plain l2: MM's SIMD kernel on the lane layout (kernels.hpp); F and f summed
+// per node in slot order (detail::mm_cost_chunk), then exactly.
+class LaneCore {
+ public:
+  explicit LaneCore(LocalizationProblem& prob)
+      : prob_(prob), L_(2.0 * prob.max_degree() + prob.max_anchor_degree() + 2.0) {
+    lanes_.build(prob);
+    norms_.assign(2 * detail::kMaxLanes, 0.0);
+  }
+  double lipschitz() const { return L_; }
+  std::size_t y_size() const { return std::size_t(lanes_.groups()) * lanes_.lanes * prob_.dim(); }
+  // Index in y (lane layout) of coordinate c of CSR slot e of owned node v.
+  std::size_t y_index(LocalId v, std::int64_t e, int c) const {
+    return lanes_.at(v, e - prob_.graph().offsets()[v], prob_.dim(), c);
+  }
+  std::int64_t chunks() const { return lanes_.size(); }
+  std::int64_t split() const { return lanes_.split; }  // chunks [0, split) need no ghost row
+  std::int64_t bytes() const { return lanes_.bytes() + std::int64_t(sizeof(double) * norms_.capacity()); }
+
+  void init(const double* x, double* y, double* w) const {
+    detail::with_dim(prob_.dim(), [&](auto P) { init_p<decltype(P)::value>(x, y, w); });
+  }
+  // One MM step from v (ghost rows included) into xout; y and w in place.
+  void step(const double* v, double* xout, double* y, double* w) {
+    std::fill(norms_.begin(), norms_.end(), 0.0);
+    const detail::MMStep st{v, xout, y, w, (L_ - 1.0) / L_, 1.0 / L_, norms_.data(), false};
+    detail::mm_chunks(prob_, lanes_, 0, lanes_.size(), st);
+  }
+  void add_terms(const double* x, const double* y, const double* w, std::int64_t c0, std::int64_t c1,
+                 detail::ExactSum* F) const {
+    detail::with_dim(prob_.dim(), [&](auto P) { add_terms_p<decltype(P)::value>(x, y, w, c0, c1, F); });
+  }
+
+ private:
+  // y_e = P_sphere(d_e)(x_i - x_j), w_ik = P_sphere(r_ik)(x_i - a_k) (as MM).
+  template <int P>
+  void init_p(const double* x, double* yv, double* wv) const {
+    const auto& gr = prob_.graph();
+    const auto& off = gr.offsets();
+    const auto& adj = gr.adjacency();
+    for (LocalId v = 0; v < gr.num_owned(); ++v) {
+      for (auto e = off[v]; e < off[v + 1]; ++e) {
+        const bool fwd = gr.global_id(v) < gr.global_id(adj[e]);
+        const LocalId i = fwd ? v : adj[e], j = fwd ? adj[e] : v;
+        double y[P];
+        for (int c = 0; c < P; ++c) y[c] = x[std::size_t(i) * P + c] - x[std::size_t(j) * P + c];
+        project_sphere<P>(gr.edge_value(e), y);
+        for (int c = 0; c < P; ++c) yv[y_index(v, e, c)] = y[c];
+      }
+      const auto& aoff = prob_.anchor_offsets();
+      for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
+        const double* a = &prob_.anchors()[std::size_t(prob_.anchor_ids()[e]) * P];
+        double* w = &wv[std::size_t(e) * P];
+        for (int c = 0; c < P; ++c) w[c] = x[std::size_t(v) * P + c] - a[c];
+        project_sphere<P>(prob_.anchor_ranges()[e], w);
+      }
+    }
+  }
+
+  // Chunks [c0, c1) of the lane layout: each sensor edge at the slot oriented
+  // (owner, neighbour) in global-id order (so once over all ranks), then the
+  // chunk's anchor edges.
+  // F[0] gets F's terms, F[1] f's: 0.5 (|x_i - x_j| - d_e)^2 per edge.
+  // Each node first sums its own edges' terms in plain doubles, in its slot
+  // order (its neighbours' global-id order, the same on every partition;
+  // detail::mm_cost_chunk, SIMD across the chunk's nodes), and only that
+  // per-node sum enters the exact accumulator: one exact add per node
+  // instead of one per edge (the exact adds were two thirds of an
+  // iteration), with the same independence of the partition. Each register
+  // lane adds into its own accumulators (merged at the end; the sums are
+  // exact, so grouping changes no bit): consecutive adds then do not wait on
+  // each other's digits.
+  template <int P>
+  void add_terms_p(const double* x, const double* y, const double* w, std::int64_t c0, std::int64_t c1,
+                   detail::ExactSum* F) const {
+    const int C = lanes_.lanes;
+    detail::ExactSum accF[detail::kMaxLanes], accf[detail::kMaxLanes];
+    const auto& aoff = prob_.anchor_offsets();
+    for (std::int64_t c = c0; c < c1; ++c) {
+      double nodeF[detail::kMaxLanes] = {}, nodef[detail::kMaxLanes] = {};
+      const unsigned any = detail::mm_cost_chunk(lanes_, P, c, x, y, nodeF, nodef);
+      for (int L = 0; L < C; ++L)
+        if ((any >> L) & 1) {
+          accF[L].add(0.5 * nodeF[L]);
+          accf[L].add(0.5 * nodef[L]);
+        }
+      for (LocalId v = lanes_.first[c]; v < lanes_.first[c] + lanes_.count[c]; ++v)
+        for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
+          const double* a = &prob_.anchors()[std::size_t(prob_.anchor_ids()[e]) * P];
+          double s = 0, z2 = 0;
+          for (int k = 0; k < P; ++k) {
+            const double z = x[std::size_t(v) * P + k] - a[k], r = z - w[std::size_t(e) * P + k];
+            s += r * r;
+            z2 += z * z;
+          }
+          const double m = std::sqrt(z2) - prob_.anchor_ranges()[e];
+          accF[0].add(0.5 * s);
+          accf[0].add(0.5 * m * m);
+        }
+    }
+    for (int L = 0; L < C; ++L) {
+      F[0].add(accF[L]);
+      F[1].add(accf[L]);
+    }
+  }
+
+  LocalizationProblem& prob_;
+  double L_;
+  detail::NodeLanes lanes_;
+  std::vector<double> norms_;  // the kernel's per-lane norms (unused: the solver sums the change itself)
+};
+
+// Weights and/or Huber: ModelMM's step and surrogate (model_mm.hpp); y per
+// CSR slot; a chunk is one owned node (the interior ones first).
+class ModelCore {
+ public:
+  explicit ModelCore(LocalizationProblem& prob) : prob_(prob), k_(prob) {}
+  double lipschitz() const { return k_.lipschitz(); }
+  std::size_t y_size() const { return prob_.graph().adjacency().size() * prob_.dim(); }
+  std::size_t y_index(LocalId, std::int64_t e, int c) const { return std::size_t(e) * prob_.dim() + c; }
+  std::int64_t chunks() const { return prob_.num_owned(); }
+  std::int64_t split() const { return prob_.graph().num_interior(); }
+  std::int64_t bytes() const { return std::int64_t(sizeof(double)) * prob_.num_owned(); }
+  void init(const double* x, double* y, double* w) const { k_.init(x, y, w); }
+  void step(const double* v, double* xout, double* y, double* w) {
+    double d, s;
+    k_.step(v, xout, y, w, &d, &s);
+  }
+  void add_terms(const double* x, const double* y, const double* w, std::int64_t c0, std::int64_t c1,
+                 detail::ExactSum* F) const {
+    k_.terms(x, y, w, LocalId(c0), LocalId(c1), &F[0], &F[1]);
+  }
+
+ private:
+  LocalizationProblem& prob_;
+  detail::ModelMMKernel k_;
+};
+
+template <class Core>
 class MMAccel final : public Algorithm {
  public:
-  explicit MMAccel(LocalizationProblem& prob)
-      : prob_(prob), L_(2.0 * prob.max_degree() + prob.max_anchor_degree() + 2.0) {}
+  explicit MMAccel(LocalizationProblem& prob) : prob_(prob), core_(prob) {}
   std::string name() const override { return algorithm_info(AlgorithmId::kMMAccel).name; }
-  double lipschitz() const override { return L_; }
+  double lipschitz() const override { return core_.lipschitz(); }
   double reals_per_iteration() const override { return prob_.dim(); }
 
   void start(const std::vector<double>& x0) override {
@@ -56,9 +203,7 @@ class MMAccel final : public Algorithm {
     std::copy(x0.begin(), x0.begin() + std::size_t(prob_.num_owned()) * prob_.dim(), x_[kCur].begin());
     prob_.graph().halo().exchange(x_[kCur].data(), prob_.dim());
     x_[kPrev] = x_[kCur];
-    lanes_.build(prob_);
-    norms_.assign(2 * detail::kMaxLanes, 0.0);
-    for (auto& b : y_) b.assign(std::size_t(lanes_.groups()) * lanes_.lanes * prob_.dim(), 0.0);
+    for (auto& b : y_) b.assign(core_.y_size(), 0.0);
     for (auto& b : w_) b.assign(prob_.anchor_ranges().size() * prob_.dim(), 0.0);
     init_for_dim();
     y_[kPrev] = y_[kCur];
@@ -71,10 +216,7 @@ class MMAccel final : public Algorithm {
   void iterate() override {
     const double beta = t_ == 0 ? 0.0 : double(t_) / double(t_ + 3);
     const double* v = extrapolate(beta);
-    const detail::MMStep st{v, x_[kOut].data(), y_[kWork].data(), w_[kWork].data(), (L_ - 1.0) / L_, 1.0 / L_,
-                            norms_.data(), false};
-    std::fill(norms_.begin(), norms_.end(), 0.0);
-    detail::mm_chunks(prob_, lanes_, 0, lanes_.size(), st);
+    core_.step(v, x_[kOut].data(), y_[kWork].data(), w_[kWork].data());
     const Costs c = surrogate(kOut);  // exchanges the new rows (the iteration's message)
     if (beta > 0 && !(c.F <= F_ && c.f <= f_)) {  // F or f would rise: keep x(k), restart
       restart();
@@ -98,11 +240,11 @@ class MMAccel final : public Algorithm {
   }
   double objective() override { return F_; }
   std::int64_t memory_bytes() const override {
-    std::size_t n = norms_.capacity();
+    std::size_t n = 0;
     for (const auto& b : x_) n += b.capacity();
     for (const auto& b : y_) n += b.capacity();
     for (const auto& b : w_) n += b.capacity();
-    return static_cast<std::int64_t>(sizeof(double) * n) + lanes_.bytes();
+    return static_cast<std::int64_t>(sizeof(double) * n) + core_.bytes();
   }
   // z(k), z(k-1) and the steps since the restart: the next iterate follows from them.
   void save(StateWriter& w) const override {
@@ -146,7 +288,7 @@ class MMAccel final : public Algorithm {
     ++restarts_;
     init_for_dim();
     detail::ExactSum sums[2];
-    add_surrogate_terms(kCur, 0, lanes_.size(), sums);
+    core_.add_terms(x_[kCur].data(), y_[kCur].data(), w_[kCur].data(), 0, core_.chunks(), sums);
     detail::allreduce_exact(sums, 2, prob_.comm());
     set_costs({sums[0].value(), sums[1].value()});
   }
@@ -171,42 +313,10 @@ class MMAccel final : public Algorithm {
     return x_[kV].data();
   }
 
-  // Index in the y buffers (lane layout) of coordinate c of CSR slot e of owned node v.
-  std::size_t y_index(LocalId v, std::int64_t e, int c) const {
-    return lanes_.at(v, e - prob_.graph().offsets()[v], prob_.dim(), c);
-  }
+  std::size_t y_index(LocalId v, std::int64_t e, int c) const { return core_.y_index(v, e, c); }
 
-  // y_e = P_sphere(d_e)(x_i - x_j), w_ik = P_sphere(r_ik)(x_i - a_k) (as MM).
-  // Into y_[kCur] and w_[kCur] (allocated by start()).
-  // (y, w) at their best values for x_[kCur], in the dimension's template.
-  void init_for_dim() {
-    detail::with_dim(prob_.dim(), [&](auto P) { init<decltype(P)::value>(); });
-  }
-  template <int P>
-  void init() {
-    const auto& gr = prob_.graph();
-    const auto& off = gr.offsets();
-    const auto& adj = gr.adjacency();
-    const auto& x = x_[kCur];
-
-    for (LocalId v = 0; v < gr.num_owned(); ++v) {
-      for (auto e = off[v]; e < off[v + 1]; ++e) {
-        const bool fwd = gr.global_id(v) < gr.global_id(adj[e]);
-        const LocalId i = fwd ? v : adj[e], j = fwd ? adj[e] : v;
-        double y[P];
-        for (int c = 0; c < P; ++c) y[c] = x[std::size_t(i) * P + c] - x[std::size_t(j) * P + c];
-        project_sphere<P>(gr.edge_value(e), y);
-        for (int c = 0; c < P; ++c) y_[kCur][y_index(v, e, c)] = y[c];
-      }
-      const auto& aoff = prob_.anchor_offsets();
-      for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
-        const double* a = &prob_.anchors()[std::size_t(prob_.anchor_ids()[e]) * P];
-        double* w = &w_[kCur][std::size_t(e) * P];
-        for (int c = 0; c < P; ++c) w[c] = x[std::size_t(v) * P + c] - a[c];
-        project_sphere<P>(prob_.anchor_ranges()[e], w);
-      }
-    }
-  }
+  // (y, w) of z(k) at their best values for x(k), where F = f.
+  void init_for_dim() { core_.init(x_[kCur].data(), y_[kCur].data(), w_[kCur].data()); }
 
   // Collective: F at (x_[b], y_[b], w_[b]) (000, eq. 2) and f at x_[b] (the
   // ML cost, the same terms as evaluate_costs), after exchanging x_[b]'s
@@ -215,70 +325,20 @@ class MMAccel final : public Algorithm {
     HaloPlan& halo = prob_.graph().halo();
     detail::ExactSum sums[2];  // exact: the same F and f, and so the same decisions, for any partition
     halo.begin(x_[b].data(), prob_.dim());
-    add_surrogate_terms(b, 0, lanes_.split, sums);
+    add_surrogate_terms(b, 0, core_.split(), sums);
     halo.end(x_[b].data(), prob_.dim());
-    add_surrogate_terms(b, lanes_.split, lanes_.size(), sums);
+    add_surrogate_terms(b, core_.split(), core_.chunks(), sums);
     detail::allreduce_exact(sums, 2, prob_.comm());
     return {sums[0].value(), sums[1].value()};
   }
   void add_surrogate_terms(int b, std::int64_t c0, std::int64_t c1, detail::ExactSum* F) const {
-    detail::with_dim(prob_.dim(), [&](auto P) { add_terms<decltype(P)::value>(b, c0, c1, F); });
-  }
-  // Chunks [c0, c1) of the lane layout: each sensor edge at the slot oriented
-  // (owner, neighbour) in global-id order (so once over all ranks), then the
-  // chunk's anchor edges.
-  // F[0] gets F's terms, F[1] f's: 0.5 (|x_i - x_j| - d_e)^2 per edge.
-  // Each node first sums its own edges' terms in plain doubles, in its slot
-  // order (its neighbours' global-id order, the same on every partition;
-  // detail::mm_cost_chunk, SIMD across the chunk's nodes), and only that
-  // per-node sum enters the exact accumulator: one exact add per node
-  // instead of one per edge (the exact adds were two thirds of an
-  // iteration), with the same independence of the partition. Each register
-  // lane adds into its own accumulators (merged at the end; the sums are
-  // exact, so grouping changes no bit): consecutive adds then do not wait on
-  // each other's digits.
-  template <int P>
-  void add_terms(int b, std::int64_t c0, std::int64_t c1, detail::ExactSum* F) const {
-    const int C = lanes_.lanes;
-    detail::ExactSum accF[detail::kMaxLanes], accf[detail::kMaxLanes];
-    const auto& aoff = prob_.anchor_offsets();
-    const double* x = x_[b].data();
-    const double* y = y_[b].data();
-    const double* w = w_[b].data();
-    for (std::int64_t c = c0; c < c1; ++c) {
-      double nodeF[detail::kMaxLanes] = {}, nodef[detail::kMaxLanes] = {};
-      const unsigned any = detail::mm_cost_chunk(lanes_, P, c, x, y, nodeF, nodef);
-      for (int L = 0; L < C; ++L)
-        if ((any >> L) & 1) {
-          accF[L].add(0.5 * nodeF[L]);
-          accf[L].add(0.5 * nodef[L]);
-        }
-      for (LocalId v = lanes_.first[c]; v < lanes_.first[c] + lanes_.count[c]; ++v)
-        for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
-          const double* a = &prob_.anchors()[std::size_t(prob_.anchor_ids()[e]) * P];
-          double s = 0, z2 = 0;
-          for (int k = 0; k < P; ++k) {
-            const double z = x[std::size_t(v) * P + k] - a[k], r = z - w[std::size_t(e) * P + k];
-            s += r * r;
-            z2 += z * z;
-          }
-          const double m = std::sqrt(z2) - prob_.anchor_ranges()[e];
-          accF[0].add(0.5 * s);
-          accf[0].add(0.5 * m * m);
-        }
-    }
-    for (int L = 0; L < C; ++L) {
-      F[0].add(accF[L]);
-      F[1].add(accf[L]);
-    }
+    core_.add_terms(x_[b].data(), y_[b].data(), w_[b].data(), c0, c1, F);
   }
 
   LocalizationProblem& prob_;
-  double L_;
+  Core core_;
   std::array<std::vector<double>, 4> x_;  // z(k), z(k-1), the step's output, the extrapolated rows
   std::array<std::vector<double>, 3> y_, w_;  // z(k), z(k-1), the step's (in place); y_ in lane layout
-  detail::NodeLanes lanes_;
-  std::vector<double> norms_;  // the kernel's per-lane norms (unused: the solver sums the change itself)
   std::int64_t t_ = 0;         // steps accepted since the last restart
   std::int64_t restarts_ = 0;
   double F_ = 0;               // F(z(k))
@@ -290,7 +350,8 @@ class MMAccel final : public Algorithm {
 namespace detail {
 
 std::unique_ptr<Algorithm> make_mm_accel(LocalizationProblem& prob, const SolverOptions&) {
-  return std::make_unique<MMAccel>(prob);
+  if (prob.model().active()) return std::make_unique<MMAccel<ModelCore>>(prob);  // weights or Huber
+  return std::make_unique<MMAccel<LaneCore>>(prob);
 }
 
 }  // namespace detail

@@ -24,7 +24,7 @@ const std::vector<AlgorithmInfo> kRegistry = {
     {A::kMM, "mm", 1, detail::make_mm, {A::kMM},
      true, true, false, false, true, false, true},
     {A::kMMAccel, "mm-accel", 6, detail::make_mm_accel, {A::kMMAccel},
-     true, false, false, false, true, false, false},
+     true, false, false, false, true, false, true},
     {A::kPipeline, "pipeline", -1, nullptr, {A::kRelaxation, A::kMM},
      true, true, true, false, true, true, true},
     {A::kBB, "bb", 2, detail::make_bb, {A::kBB},

@@ -56,14 +56,6 @@ bool honours_model(const AlgorithmInfo& a, const SolverOptions& o) {
   return true;
 }
 
-// Whether the options ask for a model other than plain l2 without weights;
-// weights auto counts only when the network has sigmas.
-bool model_in_effect(const SolverOptions& o, bool network_has_sigmas) {
-  const WeightsSpec ws = parse_weights_spec(o.weights);
-  const bool weighted = ws.kind == WeightsSpec::Kind::kFile || ws.kind == WeightsSpec::Kind::kMultiplicative ||
-                        (ws.kind == WeightsSpec::Kind::kAuto && network_has_sigmas);
-  return weighted || o.loss != SolverOptions().loss;
-}
 }  // namespace
 
 std::string SolverOptions::unsupported_option() const {
@@ -102,10 +94,10 @@ std::string SolverOptions::unsupported_option() const {
   return "";
 }
 
-SolverOptions SolverOptions::resolved_for(bool network_has_sigmas) const {
+SolverOptions SolverOptions::resolved() const {
   SolverOptions o = *this;
   const AlgorithmInfo* a = find_algorithm(algorithm);
-  if (a && a->id == AlgorithmId::kPipeline) o.refine = resolved_refine(model_in_effect(*this, network_has_sigmas));
+  if (a && a->id == AlgorithmId::kPipeline) o.refine = resolved_refine();
   return o;
 }
 
@@ -113,7 +105,7 @@ std::vector<AlgorithmId> SolverOptions::phases() const {
   const AlgorithmInfo* a = find_algorithm(algorithm);
   if (!a) return {};
   std::vector<AlgorithmId> out = a->phases;
-  const AlgorithmInfo* r = find_algorithm(resolved_refine(model_in_effect(*this, false)));
+  const AlgorithmInfo* r = find_algorithm(resolved_refine());
   if (a->id == AlgorithmId::kPipeline && r) out.back() = r->id;
   return out;
 }
@@ -138,7 +130,7 @@ Solver::Solver(LocalizationProblem& prob, SolverOptions opt) : prob_(prob), opt_
   if (!err.empty()) throw Error(err);
   // The measurement model every phase and cost uses; --weights auto means
   // none for a method that cannot honour weights (explicit values are refused).
-  opt_ = opt_.resolved_for(prob_.has_sensor_sigmas() || prob_.has_anchor_sigmas());
+  opt_ = opt_.resolved();
   WeightsSpec ws = parse_weights_spec(opt_.weights);
   if (!honours_model(*find_algorithm(opt_.algorithm), opt_)) ws.kind = WeightsSpec::Kind::kNone;
   prob_.set_measurement_model(ws, parse_loss_spec(opt_.loss));

@@ -14,6 +14,7 @@
 #include "snl/problem/metrics.hpp"
 #include "solvers/algorithm_util.hpp"
 #include "solvers/methods.hpp"
+#include "solvers/model_mm.hpp"
 
 namespace snl {
 
@@ -140,36 +141,34 @@ class ModelRelaxation final : public Algorithm {
 //   y_e <- P_sphere(y_e + (omega_e / 3) (dz_e - y_e))   (anchors: omega / 2).
 class ModelMM final : public Algorithm {
  public:
-  explicit ModelMM(LocalizationProblem& prob)
-      : prob_(prob),
-        L_(2.0 * prob.model().max_weight_sum + prob.model().max_anchor_weight_sum + 2.0) {}
+  explicit ModelMM(LocalizationProblem& prob) : prob_(prob), k_(prob) {}
   std::string name() const override { return algorithm_info(AlgorithmId::kMM).name; }
-  double lipschitz() const override { return L_; }
+  double lipschitz() const override { return k_.lipschitz(); }
   double reals_per_iteration() const override { return prob_.dim(); }
 
   void start(const std::vector<double>& x0) override {
     x_ = with_ghost_rows(prob_, x0);
     xn_ = x_;
     prob_.graph().halo().exchange(x_.data(), prob_.dim());
-    detail::with_dim(prob_.dim(), [&](auto P) { init<decltype(P)::value>(); });
-    dinv_.assign(prob_.num_owned(), 0.0);
-    const auto sums = node_weight_sums(prob_);
-    for (LocalId v = 0; v < prob_.num_owned(); ++v) {
-      const double D = 3.0 * sums[v].first + 2.0 * sums[v].second;
-      dinv_[v] = D > 0 ? 1.0 / D : 0.0;
-    }
+    y_.assign(prob_.graph().adjacency().size() * prob_.dim(), 0.0);
+    aw_.assign(prob_.anchor_ranges().size() * prob_.dim(), 0.0);
+    k_.init(x_.data(), y_.data(), aw_.data());
   }
 
   void iterate() override {
     prob_.graph().halo().exchange(x_.data(), prob_.dim());
-    detail::with_dim(prob_.dim(), [&](auto P) { step<decltype(P)::value>(); });
+    k_.step(x_.data(), xn_.data(), y_.data(), aw_.data(), &diff_sq_, &x_sq_);
     std::swap(x_, xn_);  // xn_ keeps x(t) for previous_positions()
   }
 
   const std::vector<double>& positions() const override { return x_; }
+  // Phi(x, y, w), each edge once; exact sums.
   double objective() override {
     prob_.graph().halo().exchange(x_.data(), prob_.dim());
-    return detail::with_dim(prob_.dim(), [&](auto P) { return surrogate<decltype(P)::value>(); });
+    detail::ExactSum F;
+    k_.terms(x_.data(), y_.data(), aw_.data(), 0, prob_.num_owned(), &F, nullptr);
+    detail::allreduce_exact(&F, 1, prob_.comm());
+    return F.value();
   }
   const double* previous_positions() const override { return xn_.data(); }
   void change_norms(double* d, double* s) const override {
@@ -177,7 +176,8 @@ class ModelMM final : public Algorithm {
     *s = x_sq_;
   }
   std::int64_t memory_bytes() const override {
-    return static_cast<std::int64_t>(sizeof(double) * (x_.capacity() + xn_.capacity() + y_.capacity() + aw_.capacity()));
+    return static_cast<std::int64_t>(sizeof(double) * (x_.capacity() + xn_.capacity() + y_.capacity() + aw_.capacity() +
+                                                       std::size_t(prob_.num_owned())));
   }
   void save(StateWriter& w) const override {
     const int p = prob_.dim();
@@ -193,123 +193,147 @@ class ModelMM final : public Algorithm {
   }
 
  private:
-  // y_e = P_sphere(x_i - x_j) in the orientation i < j (global ids), w = P(x_v - a_k).
-  template <int P>
-  void init() {
-    const auto& gr = prob_.graph();
-    const auto& off = gr.offsets();
-    const auto& aoff = prob_.anchor_offsets();
-    y_.assign(gr.adjacency().size() * P, 0.0);
-    aw_.assign(prob_.anchor_ranges().size() * P, 0.0);
-    for (LocalId v = 0; v < gr.num_owned(); ++v) {
-      for (auto e = off[v]; e < off[v + 1]; ++e) {
-        double* y = &y_[std::size_t(e) * P];
-        oriented_diff<P>(v, gr.adjacency()[e], y);
-        project_sphere<P>(gr.edge_value(e), y);
-      }
-      for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
-        const double* a = &prob_.anchors()[std::size_t(prob_.anchor_ids()[e]) * P];
-        double* w = &aw_[std::size_t(e) * P];
-        for (int c = 0; c < P; ++c) w[c] = x_[std::size_t(v) * P + c] - a[c];
-        project_sphere<P>(prob_.anchor_ranges()[e], w);
-      }
-    }
-  }
-
-  // dz = x_i - x_j of the edge {v, u} in its orientation i < j (global ids); returns +1 if v = i.
-  template <int P>
-  double oriented_diff(LocalId v, LocalId u, double* dz) const {
-    const bool fwd = prob_.graph().global_id(v) < prob_.graph().global_id(u);
-    const double* xi = &x_[std::size_t(fwd ? v : u) * P];
-    const double* xj = &x_[std::size_t(fwd ? u : v) * P];
-    for (int c = 0; c < P; ++c) dz[c] = xi[c] - xj[c];
-    return fwd ? 1.0 : -1.0;
-  }
-
-  // One edge variable: acc += sgn omega w (dz - y), y <- P_sphere(y + (omega / Dy)(dz - y)).
-  template <int P>
-  void edge_update(const double* dz, double sgn, double weight, double Dy, double rho, double* y, double* acc) const {
-    double r[P], s = 0;
-    for (int c = 0; c < P; ++c) {
-      r[c] = dz[c] - y[c];
-      s += r[c] * r[c];
-    }
-    const double om = huber_factor(prob_.model().huber_delta, std::sqrt(s));
-    const double a = weight * om;
-    for (int c = 0; c < P; ++c) acc[c] += sgn * a * r[c];
-    const double step = om / Dy;
-    for (int c = 0; c < P; ++c) y[c] += step * r[c];
-    project_sphere<P>(rho, y);
-  }
-
-  template <int P>
-  void step() {
-    const auto& gr = prob_.graph();
-    const auto& off = gr.offsets();
-    const auto& aoff = prob_.anchor_offsets();
-    const MeasurementModel& mo = prob_.model();
-    double d = 0, s = 0;
-    for (LocalId v = 0; v < gr.num_owned(); ++v) {
-      double acc[P] = {}, dz[P];
-      for (auto e = off[v]; e < off[v + 1]; ++e) {
-        const double sgn = oriented_diff<P>(v, gr.adjacency()[e], dz);
-        edge_update<P>(dz, sgn, mo.edge_weight(e), 3.0, gr.edge_value(e), &y_[std::size_t(e) * P], acc);
-      }
-      for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
-        const double* a = &prob_.anchors()[std::size_t(prob_.anchor_ids()[e]) * P];
-        for (int c = 0; c < P; ++c) dz[c] = x_[std::size_t(v) * P + c] - a[c];
-        edge_update<P>(dz, 1.0, mo.anchor_weight(e), 2.0, prob_.anchor_ranges()[e], &aw_[std::size_t(e) * P], acc);
-      }
-      for (int c = 0; c < P; ++c) {
-        const std::size_t t = std::size_t(v) * P + c;
-        xn_[t] = x_[t] - acc[c] * dinv_[v];
-        d += (xn_[t] - x_[t]) * (xn_[t] - x_[t]);
-        s += xn_[t] * xn_[t];
-      }
-    }
-    diff_sq_ = d;
-    x_sq_ = s;
-  }
-
-  // Phi(x, y, w), each edge once (by its smaller end); exact sums.
-  template <int P>
-  double surrogate() const {
-    const auto& gr = prob_.graph();
-    const auto& off = gr.offsets();
-    const auto& aoff = prob_.anchor_offsets();
-    const MeasurementModel& mo = prob_.model();
-    detail::ExactSum F;
-    auto term = [&](const double* dz, const double* y, double weight) {
-      double s = 0;
-      for (int c = 0; c < P; ++c) s += (dz[c] - y[c]) * (dz[c] - y[c]);
-      F.add(weight * loss_value(mo.huber_delta, std::sqrt(s)));
-    };
-    for (LocalId v = 0; v < gr.num_owned(); ++v) {
-      double dz[P];
-      for (auto e = off[v]; e < off[v + 1]; ++e) {
-        if (oriented_diff<P>(v, gr.adjacency()[e], dz) < 0) continue;
-        term(dz, &y_[std::size_t(e) * P], mo.edge_weight(e));
-      }
-      for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
-        const double* a = &prob_.anchors()[std::size_t(prob_.anchor_ids()[e]) * P];
-        for (int c = 0; c < P; ++c) dz[c] = x_[std::size_t(v) * P + c] - a[c];
-        term(dz, &aw_[std::size_t(e) * P], mo.anchor_weight(e));
-      }
-    }
-    detail::allreduce_exact(&F, 1, prob_.comm());
-    return F.value();
-  }
-
   LocalizationProblem& prob_;
-  double L_;
+  detail::ModelMMKernel k_;
   std::vector<double> x_, xn_, y_, aw_;  // y_: P per CSR slot; aw_: P per anchor measurement
-  std::vector<double> dinv_;             // 1 / D_x per owned node
   double diff_sq_ = 0, x_sq_ = 0;
 };
 
 }  // namespace
 
 namespace detail {
+
+ModelMMKernel::ModelMMKernel(const LocalizationProblem& prob)
+    : prob_(prob), L_(2.0 * prob.model().max_weight_sum + prob.model().max_anchor_weight_sum + 2.0) {
+  dinv_.assign(prob.num_owned(), 0.0);
+  const auto sums = node_weight_sums(prob);
+  for (LocalId v = 0; v < prob.num_owned(); ++v) {
+    const double D = 3.0 * sums[v].first + 2.0 * sums[v].second;
+    dinv_[v] = D > 0 ? 1.0 / D : 0.0;
+  }
+}
+
+void ModelMMKernel::init(const double* x, double* y, double* aw) const {
+  with_dim(prob_.dim(), [&](auto P) { init_p<decltype(P)::value>(x, y, aw); });
+}
+void ModelMMKernel::step(const double* x, double* xn, double* y, double* aw, double* d, double* s) const {
+  with_dim(prob_.dim(), [&](auto P) { step_p<decltype(P)::value>(x, xn, y, aw, d, s); });
+}
+void ModelMMKernel::terms(const double* x, const double* y, const double* aw, LocalId v0, LocalId v1, ExactSum* F,
+                          ExactSum* f) const {
+  with_dim(prob_.dim(), [&](auto P) { terms_p<decltype(P)::value>(x, y, aw, v0, v1, F, f); });
+}
+
+namespace {
+
+// dz = x_i - x_j of the edge {v, u} in its orientation i < j (global ids); returns +1 if v = i.
+template <int P>
+double oriented_diff(const LocalizationProblem& prob, const double* x, LocalId v, LocalId u, double* dz) {
+  const bool fwd = prob.graph().global_id(v) < prob.graph().global_id(u);
+  const double* xi = &x[std::size_t(fwd ? v : u) * P];
+  const double* xj = &x[std::size_t(fwd ? u : v) * P];
+  for (int c = 0; c < P; ++c) dz[c] = xi[c] - xj[c];
+  return fwd ? 1.0 : -1.0;
+}
+
+// One edge variable: acc += sgn omega w (dz - y), y <- P_sphere(y + (omega / Dy)(dz - y)).
+template <int P>
+void edge_update(double delta, const double* dz, double sgn, double weight, double Dy, double rho, double* y,
+                 double* acc) {
+  double r[P], s = 0;
+  for (int c = 0; c < P; ++c) {
+    r[c] = dz[c] - y[c];
+    s += r[c] * r[c];
+  }
+  const double om = huber_factor(delta, std::sqrt(s));
+  const double a = weight * om;
+  for (int c = 0; c < P; ++c) acc[c] += sgn * a * r[c];
+  const double step = om / Dy;
+  for (int c = 0; c < P; ++c) y[c] += step * r[c];
+  project_sphere<P>(rho, y);
+}
+
+}  // namespace
+
+template <int P>
+void ModelMMKernel::init_p(const double* x, double* y, double* aw) const {
+  const auto& gr = prob_.graph();
+  const auto& off = gr.offsets();
+  const auto& aoff = prob_.anchor_offsets();
+  for (LocalId v = 0; v < gr.num_owned(); ++v) {
+    for (auto e = off[v]; e < off[v + 1]; ++e) {
+      double* ye = &y[std::size_t(e) * P];
+      oriented_diff<P>(prob_, x, v, gr.adjacency()[e], ye);
+      project_sphere<P>(gr.edge_value(e), ye);
+    }
+    for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
+      const double* a = &prob_.anchors()[std::size_t(prob_.anchor_ids()[e]) * P];
+      double* w = &aw[std::size_t(e) * P];
+      for (int c = 0; c < P; ++c) w[c] = x[std::size_t(v) * P + c] - a[c];
+      project_sphere<P>(prob_.anchor_ranges()[e], w);
+    }
+  }
+}
+
+template <int P>
+void ModelMMKernel::step_p(const double* x, double* xn, double* y, double* aw, double* dsq, double* ssq) const {
+  const auto& gr = prob_.graph();
+  const auto& off = gr.offsets();
+  const auto& aoff = prob_.anchor_offsets();
+  const MeasurementModel& mo = prob_.model();
+  double d = 0, s = 0;
+  for (LocalId v = 0; v < gr.num_owned(); ++v) {
+    double acc[P] = {}, dz[P];
+    for (auto e = off[v]; e < off[v + 1]; ++e) {
+      const double sgn = oriented_diff<P>(prob_, x, v, gr.adjacency()[e], dz);
+      edge_update<P>(mo.huber_delta, dz, sgn, mo.edge_weight(e), 3.0, gr.edge_value(e), &y[std::size_t(e) * P], acc);
+    }
+    for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
+      const double* a = &prob_.anchors()[std::size_t(prob_.anchor_ids()[e]) * P];
+      for (int c = 0; c < P; ++c) dz[c] = x[std::size_t(v) * P + c] - a[c];
+      edge_update<P>(mo.huber_delta, dz, 1.0, mo.anchor_weight(e), 2.0, prob_.anchor_ranges()[e],
+                     &aw[std::size_t(e) * P], acc);
+    }
+    for (int c = 0; c < P; ++c) {
+      const std::size_t t = std::size_t(v) * P + c;
+      xn[t] = x[t] - acc[c] * dinv_[v];
+      d += (xn[t] - x[t]) * (xn[t] - x[t]);
+      s += xn[t] * xn[t];
+    }
+  }
+  *dsq = d;
+  *ssq = s;
+}
+
+template <int P>
+void ModelMMKernel::terms_p(const double* x, const double* y, const double* aw, LocalId v0, LocalId v1, ExactSum* F,
+                            ExactSum* f) const {
+  const auto& gr = prob_.graph();
+  const auto& off = gr.offsets();
+  const auto& aoff = prob_.anchor_offsets();
+  const MeasurementModel& mo = prob_.model();
+  auto term = [&](const double* dz, const double* ye, double weight, double rho) {
+    double s = 0, z2 = 0;
+    for (int c = 0; c < P; ++c) {
+      s += (dz[c] - ye[c]) * (dz[c] - ye[c]);
+      z2 += dz[c] * dz[c];
+    }
+    F->add(weight * loss_value(mo.huber_delta, std::sqrt(s)));
+    if (f) f->add(weight * loss_value(mo.huber_delta, std::abs(std::sqrt(z2) - rho)));
+  };
+  for (LocalId v = v0; v < v1; ++v) {
+    double dz[P];
+    for (auto e = off[v]; e < off[v + 1]; ++e) {
+      if (oriented_diff<P>(prob_, x, v, gr.adjacency()[e], dz) < 0) continue;
+      term(dz, &y[std::size_t(e) * P], mo.edge_weight(e), gr.edge_value(e));
+    }
+    for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
+      const double* a = &prob_.anchors()[std::size_t(prob_.anchor_ids()[e]) * P];
+      for (int c = 0; c < P; ++c) dz[c] = x[std::size_t(v) * P + c] - a[c];
+      term(dz, &aw[std::size_t(e) * P], mo.anchor_weight(e), prob_.anchor_ranges()[e]);
+    }
+  }
+}
 
 std::unique_ptr<Algorithm> make_model_relaxation(LocalizationProblem& prob) {
   return std::make_unique<ModelRelaxation>(prob);

@@ -1,12 +1,13 @@
 // The weighted / Huber measurement model (src/problem/weights.cpp,
 // src/solvers/weighted.cpp and the model-aware metrics, PM, async, BB): the
-// relaxation, MM, PM, async and BB against their serial reference twins, MM's objective never
+// relaxation, MM, mm-accel, PM, async and BB against their serial reference twins, MM's objective never
 // increasing, the gradients against finite differences, and bit-identical
 // positions of every method on 1, 2 and 3 ranks.
 #include <gtest/gtest.h>
 #include <mpi.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 
 #include "reference/bb.hpp"
@@ -48,7 +49,7 @@ std::vector<double> run_model(MPI_Comm comm, const Network& w, const std::string
   opt.history_every = 1000000;
   opt.weights = weights;
   opt.loss = loss;
-  opt.check_monotone = alg == "mm";
+  opt.check_monotone = alg == "mm" || alg == "mm-accel";
   Solver solver(prob, opt);
   std::vector<double> x;
   const Summary s = solver.solve(random_initial_positions(prob, 3), &x);
@@ -108,6 +109,17 @@ TEST(WeightedModel, EveryMethodMatchesItsSerialReference) {
       const auto rm = reference::model_mm(w, m, x0, 60, &phi);
       for (std::size_t t = 0; t < xm.size(); ++t) ASSERT_NEAR(xm[t], rm[t], 1e-11) << loss << " mm " << t;
       for (std::size_t t = 1; t < phi.size(); ++t) EXPECT_LE(phi[t], phi[t - 1] * (1 + 1e-14)) << loss << " " << t;
+      // mm-accel: the same step from the extrapolated point, with its
+      // acceptance test; the twin's restarts show that the test was exercised.
+      std::vector<double> ml;
+      int restarts = 0;
+      const auto xa = run_model(MPI_COMM_WORLD, w, "mm-accel", 300, "file", loss);
+      const auto ra = reference::model_mm_accel(w, m, x0, 300, &ml, &restarts);
+      for (std::size_t t = 0; t < xa.size(); ++t) ASSERT_NEAR(xa[t], ra[t], 1e-11) << loss << " mm-accel " << t;
+      for (std::size_t t = 1; t < ml.size(); ++t) EXPECT_LE(ml[t], ml[t - 1]) << loss << " " << t;
+      EXPECT_LT(ml[60], phi.back()) << loss << ": mm-accel ends above MM after as many iterations";
+      std::printf("%s dim %d: mm-accel restarts %d in 300 iterations\n", loss.c_str(), dim, restarts);
+      EXPECT_GT(restarts, 0) << loss;
       expect_sequential_and_bb_match(w, x0, m, loss);
     }
   }
@@ -159,7 +171,7 @@ TEST(WeightedModel, GradientsMatchFiniteDifferences) {
 TEST(WeightedModel, BitIdenticalForOneTwoThreeRanks) {
   const Network w = weighted_network();
   for (const char* loss : {"l2", "huber:0.05"})
-    for (const char* alg : {"relaxation", "mm", "pipeline", "bb", "pm", "async", "async-exact"}) {
+    for (const char* alg : {"relaxation", "mm", "mm-accel", "pipeline", "bb", "pm", "async", "async-exact"}) {
       const auto ref = run_model(MPI_COMM_SELF, w, alg, 25, "file", loss);
       for (int k = 2; k <= world_size(); ++k) {
         MPI_Comm sub;

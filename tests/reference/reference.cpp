@@ -388,51 +388,67 @@ std::vector<double> model_nesterov(const Network& net, const Model& m, const std
   return x;
 }
 
-std::vector<double> model_mm(const Network& net, const Model& m, const std::vector<double>& x0, int iters,
-                             std::vector<double>* phi) {
-  const int p = net.dim;
-  const auto D = diag_majorizer(net, m, 3.0, 2.0);
-  const std::size_t E = net.sensor_ranges.size(), Ea = net.anchor_ranges.size();
-  // Every measurement as (i, j or -1, anchor row, range, weight), j > i for sensor pairs.
-  std::vector<GlobalId> ei(E + Ea), ej(E + Ea);
-  std::vector<double> rho(E + Ea), wt(E + Ea);
-  for (std::size_t e = 0; e < E; ++e) {
-    ei[e] = std::min(net.sensor_edges[2 * e], net.sensor_edges[2 * e + 1]);
-    ej[e] = std::max(net.sensor_edges[2 * e], net.sensor_edges[2 * e + 1]);
-    rho[e] = net.sensor_ranges[e];
-    wt[e] = m.sensor_w[e];
+namespace {
+// MM on the model (000 Algorithm 1 with Huber majorizer weights and per-node
+// steps): every measurement as (i, j or -1 - k, range, weight), j > i for
+// sensor pairs, with one edge variable y each.
+struct ModelMMRef {
+  const Network& net;
+  const Model& m;
+  int p;
+  std::vector<double> D;
+  std::vector<GlobalId> ei, ej;
+  std::vector<double> rho, wt;
+
+  ModelMMRef(const Network& n, const Model& mo) : net(n), m(mo), p(n.dim), D(diag_majorizer(n, mo, 3.0, 2.0)) {
+    const std::size_t E = net.sensor_ranges.size(), Ea = net.anchor_ranges.size();
+    ei.resize(E + Ea);
+    ej.resize(E + Ea);
+    rho.resize(E + Ea);
+    wt.resize(E + Ea);
+    for (std::size_t e = 0; e < E; ++e) {
+      ei[e] = std::min(net.sensor_edges[2 * e], net.sensor_edges[2 * e + 1]);
+      ej[e] = std::max(net.sensor_edges[2 * e], net.sensor_edges[2 * e + 1]);
+      rho[e] = net.sensor_ranges[e];
+      wt[e] = m.sensor_w[e];
+    }
+    for (std::size_t e = 0; e < Ea; ++e) {
+      ei[E + e] = net.anchor_edges[2 * e];
+      ej[E + e] = -1 - net.anchor_edges[2 * e + 1];  // anchor k as -1 - k
+      rho[E + e] = net.anchor_ranges[e];
+      wt[E + e] = m.anchor_w[e];
+    }
   }
-  for (std::size_t e = 0; e < Ea; ++e) {
-    ei[E + e] = net.anchor_edges[2 * e];
-    ej[E + e] = -1 - net.anchor_edges[2 * e + 1];  // anchor k as -1 - k
-    rho[E + e] = net.anchor_ranges[e];
-    wt[E + e] = m.anchor_w[e];
-  }
-  std::vector<double> x = x0, y((E + Ea) * p);
-  auto dz = [&](std::size_t e, double* out) {
+  std::size_t size() const { return rho.size(); }
+  void dz(const std::vector<double>& x, std::size_t e, double* out) const {
     const double* c = ej[e] >= 0 ? &x[ej[e] * p] : &net.anchors[(-1 - ej[e]) * p];
     for (int q = 0; q < p; ++q) out[q] = x[ei[e] * p + q] - c[q];
-  };
-  for (std::size_t e = 0; e < E + Ea; ++e) {
-    dz(e, &y[e * p]);
-    sphere(rho[e], &y[e * p], p);
   }
-  auto Phi = [&]() {
+  // y at its best value for x: Phi(x, y) = f(x).
+  std::vector<double> best_y(const std::vector<double>& x) const {
+    std::vector<double> y(size() * p);
+    for (std::size_t e = 0; e < size(); ++e) {
+      dz(x, e, &y[e * p]);
+      sphere(rho[e], &y[e * p], p);
+    }
+    return y;
+  }
+  double Phi(const std::vector<double>& x, const std::vector<double>& y) const {
     double s = 0, z[3];
-    for (std::size_t e = 0; e < E + Ea; ++e) {
-      dz(e, z);
+    for (std::size_t e = 0; e < size(); ++e) {
+      dz(x, e, z);
       double r2 = 0;
       for (int q = 0; q < p; ++q) r2 += (z[q] - y[e * p + q]) * (z[q] - y[e * p + q]);
       s += wt[e] * huber(m.delta, std::sqrt(r2));
     }
     return s;
-  };
-  if (phi) phi->assign(1, Phi());
-  for (int t = 0; t < iters; ++t) {
+  }
+  // One step from (x, y) in place.
+  void step(std::vector<double>& x, std::vector<double>& y) const {
     std::vector<double> gx(x.size(), 0.0), yn = y;
-    for (std::size_t e = 0; e < E + Ea; ++e) {
+    for (std::size_t e = 0; e < size(); ++e) {
       double z[3], r[3], r2 = 0;
-      dz(e, z);
+      dz(x, e, z);
       for (int q = 0; q < p; ++q) {
         r[q] = z[q] - y[e * p + q];
         r2 += r[q] * r[q];
@@ -447,7 +463,52 @@ std::vector<double> model_mm(const Network& net, const Model& m, const std::vect
     }
     for (std::size_t q = 0; q < x.size(); ++q) x[q] -= gx[q] / D[q / p];
     y.swap(yn);
-    if (phi) phi->push_back(Phi());
+  }
+};
+}  // namespace
+
+std::vector<double> model_mm(const Network& net, const Model& m, const std::vector<double>& x0, int iters,
+                             std::vector<double>* phi) {
+  const ModelMMRef r(net, m);
+  std::vector<double> x = x0, y = r.best_y(x0);
+  if (phi) phi->assign(1, r.Phi(x, y));
+  for (int t = 0; t < iters; ++t) {
+    r.step(x, y);
+    if (phi) phi->push_back(r.Phi(x, y));
+  }
+  return x;
+}
+
+std::vector<double> model_mm_accel(const Network& net, const Model& m, const std::vector<double>& x0, int iters,
+                                   std::vector<double>* ml, int* restarts) {
+  const ModelMMRef r(net, m);
+  std::vector<double> x = x0, y = r.best_y(x0), xp = x, yp = y;
+  double F = r.Phi(x, y), f = model_ml_cost(net, m, x);
+  if (ml) ml->assign(1, f);
+  if (restarts) *restarts = 0;
+  long t = 0;
+  for (int it = 0; it < iters; ++it) {
+    const double beta = t == 0 ? 0.0 : double(t) / double(t + 3);
+    std::vector<double> v = x, yv = y;
+    for (std::size_t q = 0; q < v.size(); ++q) v[q] = x[q] + beta * (x[q] - xp[q]);
+    for (std::size_t q = 0; q < yv.size(); ++q) yv[q] = y[q] + beta * (y[q] - yp[q]);
+    r.step(v, yv);
+    const double Fn = r.Phi(v, yv), fn = model_ml_cost(net, m, v);
+    if (beta > 0 && !(Fn <= F && fn <= f)) {  // reject: restart from x with its best y
+      t = 0;
+      y = r.best_y(x);
+      F = r.Phi(x, y);
+      if (restarts) ++*restarts;
+    } else {
+      xp.swap(x);
+      x.swap(v);
+      yp.swap(y);
+      y.swap(yv);
+      F = Fn;
+      f = fn;
+      ++t;
+    }
+    if (ml) ml->push_back(f);
   }
   return x;
 }

@@ -55,6 +55,12 @@ std::vector<double> model_nesterov(const Network& net, const Model& m, const std
 /// Phi = sum w rho(|x_i - x_j - y|) + anchors after each iteration into *phi.
 std::vector<double> model_mm(const Network& net, const Model& m, const std::vector<double>& x0, int iters,
                              std::vector<double>* phi = nullptr);
+/// mm-accel on the model: the MM step above from the extrapolated point
+/// z(k) + t/(t+3) (z(k) - z(k-1)), accepted when neither Phi nor the ML cost
+/// rises, else a restart (t = 0, y at its best for x(k)). The ML cost after
+/// each iteration into *ml, the rejected steps into *restarts.
+std::vector<double> model_mm_accel(const Network& net, const Model& m, const std::vector<double>& x0, int iters,
+                                   std::vector<double>* ml = nullptr, int* restarts = nullptr);
 /// The projection method with x_i <- sum_e a_e P_e(x_i) / sum_e a_e,
 /// a_e = w_e omega(dist(x_i, disk e)), in pm's (colour, id) order.
 std::vector<double> model_pm(const Network& net, const Model& m, const std::vector<double>& x0, int sweeps);
