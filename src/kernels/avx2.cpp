@@ -138,12 +138,14 @@ SNL_AVX2 inline __m256d lane_mask4(unsigned bits) {
   return _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_and_si256(_mm256_set1_epi64x(bits), bit), bit));
 }
 
-// Node-lane MM step, 4 nodes per register (full chunks only).
-template <int P>
+// Node-lane MM step, 4 nodes per register (full chunks only). Extrap: the edge
+// variables are mm-accel's extrapolated point ya + beta (ya - yb), formed
+// on the fly (MMStep::ya), the result stored to y.
+template <int P, bool Extrap = false>
 SNL_AVX2 void mm_chunks_avx2(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
                              const MMStep& s) {
   const __m256d one = _mm256_set1_pd(1.0), minus_one = _mm256_set1_pd(-1.0), zero = _mm256_setzero_pd();
-  const __m256d vkeep = _mm256_set1_pd(s.keep), vinvL = _mm256_set1_pd(s.invL);
+  const __m256d vkeep = _mm256_set1_pd(s.keep), vinvL = _mm256_set1_pd(s.invL), vbeta = _mm256_set1_pd(s.beta);
   __m256d DD = load_scalars_0213(s.norms), SS = load_scalars_0213(s.norms + 4);
   const std::int64_t last = nl.groups() - 1;
   for (std::int64_t c = c0; c < c1; ++c) {
@@ -153,7 +155,12 @@ SNL_AVX2 void mm_chunks_avx2(const LocalizationProblem& prob, const NodeLanes& n
     load_own<P>(s.x + i0, V);
     for (int k = 0; k < P; ++k) A[k] = _mm256_setzero_pd();
     for (std::int64_t g = nl.group_off[c]; g < nl.group_off[c + 1]; ++g) {
-      prefetch_group<4, P>(nl, g, last, s.y);
+      if constexpr (Extrap) {
+        prefetch_group<4, P>(nl, g, last, s.ya);
+        prefetch_group<4, P>(nl, g, last, s.yb);
+      } else {
+        prefetch_group<4, P>(nl, g, last, s.y);
+      }
       prefetch_rows<4, P>(nl, g, last, s.x);
       __m256d U[P], dz[P], yn[P];
       load_rows<P>(s.x, nl.adj.data() + 4 * g, U);
@@ -165,7 +172,13 @@ SNL_AVX2 void mm_chunks_avx2(const LocalizationProblem& prob, const NodeLanes& n
         // dz = x_i - x_j in the edge's orientation (both differences,
         // selected, so that signed zeros match the scalar form).
         dz[k] = _mm256_blendv_pd(_mm256_sub_pd(U[k], V[k]), _mm256_sub_pd(V[k], U[k]), fw);
-        const __m256d Y = _mm256_loadu_pd(yg + 4 * k);
+        __m256d Y;
+        if constexpr (Extrap) {  // a + beta (a - b), as the blend pass
+          const __m256d Ya = _mm256_loadu_pd(s.ya + 4 * P * g + 4 * k);
+          Y = _mm256_add_pd(Ya, _mm256_mul_pd(vbeta, _mm256_sub_pd(Ya, _mm256_loadu_pd(s.yb + 4 * P * g + 4 * k))));
+        } else {
+          Y = _mm256_loadu_pd(yg + 4 * k);
+        }
         A[k] = _mm256_add_pd(A[k], _mm256_and_pd(_mm256_mul_pd(sgn, _mm256_sub_pd(dz[k], Y)), re));
         yn[k] = _mm256_add_pd(_mm256_mul_pd(vkeep, Y), _mm256_mul_pd(vinvL, dz[k]));
       }
@@ -247,7 +260,9 @@ unsigned mm_cost_chunk_avx2(const NodeLanes& nl, int p, std::int64_t c, const do
   return p == 2 ? mm_cost_chunk_avx2_p<2>(nl, c, x, y, F, f) : mm_cost_chunk_avx2_p<3>(nl, c, x, y, F, f);
 }
 
-const KernelTable kAvx2Kernels = {{relax_chunks_avx2<2>, relax_chunks_avx2<3>}, {mm_chunks_avx2<2>, mm_chunks_avx2<3>}};
+const KernelTable kAvx2Kernels = {{relax_chunks_avx2<2>, relax_chunks_avx2<3>},
+                                  {mm_chunks_avx2<2>, mm_chunks_avx2<3>},
+                                  {mm_chunks_avx2<2, true>, mm_chunks_avx2<3, true>}};
 
 }  // namespace snl::detail
 

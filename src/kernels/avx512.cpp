@@ -204,7 +204,8 @@ SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& prob, const NodeLane
 }  // namespace
 
 const KernelTable kAvx512Kernels = {{relax_chunks_avx512<2>, relax_chunks_avx512<3>},
-                                    {mm_chunks_avx512<2>, mm_chunks_avx512<3>}};
+                                    {mm_chunks_avx512<2>, mm_chunks_avx512<3>},
+                                    {nullptr, nullptr}};  // mm-accel blends y in its own pass here
 #pragma GCC diagnostic pop
 
 }  // namespace snl::detail

@@ -98,7 +98,17 @@ void relax_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int
 
 void mm_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
                const MMStep& s) {
-  run_chunks<&KernelTable::mm>(prob, nl, c0, c1, s);
+  if (s.ya) {
+    if (!mm_chunks_extrapolate(nl)) throw Error("mm_chunks: no extrapolating kernel for this layout");
+    run_chunks<&KernelTable::mm_extrapolated>(prob, nl, c0, c1, s);
+  } else {
+    run_chunks<&KernelTable::mm>(prob, nl, c0, c1, s);
+  }
+}
+
+bool mm_chunks_extrapolate(const NodeLanes& nl) {
+  const KernelTable* simd = simd_table(nl.lanes);
+  return !simd || simd->mm_extrapolated[0];
 }
 
 unsigned mm_cost_chunk(const NodeLanes& nl, int p, std::int64_t c, const double* x, const double* y, double* F,

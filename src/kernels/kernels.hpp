@@ -211,9 +211,19 @@ struct MMStep {
   double keep, invL;
   double* norms;
   bool stream = false;  ///< non-temporal stores of xn (stream_rows; p = 2 only)
+  /// mm-accel's extrapolated edge variables, read on the fly: where ya is
+  /// set, each real slot's y_e is taken as ya + beta (ya - yb) (the same
+  /// arithmetic as a separate blend pass, so the same bits) and the step's
+  /// result is written to y. Only where mm_chunks_extrapolate() says so.
+  const double* ya = nullptr;
+  const double* yb = nullptr;
+  double beta = 0;
 };
 void mm_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
                const MMStep& s);
+/// Whether mm_chunks honours MMStep::ya on this layout with the kernels in
+/// use (the scalar and AVX2 kernels do; the AVX-512 ones do not).
+bool mm_chunks_extrapolate(const NodeLanes& nl);
 
 /// mm-accel's acceptance costs (src/solvers/mm_accel.cpp) on chunk c: per
 /// register lane L, the sums over its node's forward slots (MM's

@@ -54,8 +54,12 @@ void mm_chunk_scalar(const LocalizationProblem& prob, const NodeLanes& nl, std::
     double acc[P] = {}, t[P], y[P];
     for (std::int64_t g = g0; g < g1; ++g) {
       if (!((nl.real[g] >> L) & 1)) continue;
-      double* yg = s.y + std::size_t(g * P) * C + L;
-      for (int k = 0; k < P; ++k) y[k] = yg[k * C];
+      const std::size_t yi = std::size_t(g * P) * C + L;
+      double* yg = s.y + yi;
+      if (s.ya)  // mm-accel's extrapolated point, as its blend pass would form it
+        for (int k = 0; k < P; ++k) y[k] = s.ya[yi + k * C] + s.beta * (s.ya[yi + k * C] - s.yb[yi + k * C]);
+      else
+        for (int k = 0; k < P; ++k) y[k] = yg[k * C];
       mm_term<P>(xv, s.x + std::size_t(nl.adj[g * C + q]) * P, (nl.fwd[g] >> L) & 1, nl.rho[g * C + L], s.keep,
                  s.invL, y, t);
       for (int k = 0; k < P; ++k) {
@@ -91,6 +95,7 @@ void mm_chunks_scalar(const LocalizationProblem& prob, const NodeLanes& nl, std:
 }  // namespace
 
 const KernelTable kScalarKernels = {{relax_chunks_scalar<2>, relax_chunks_scalar<3>},
+                                    {mm_chunks_scalar<2>, mm_chunks_scalar<3>},
                                     {mm_chunks_scalar<2>, mm_chunks_scalar<3>}};
 const RelaxChunksFn kScalarRelax1 = relax_chunks_scalar<1>;
 const MMChunksFn kScalarMM1 = mm_chunks_scalar<1>;

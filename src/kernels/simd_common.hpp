@@ -27,6 +27,7 @@ using MMChunksFn = void (*)(const LocalizationProblem&, const NodeLanes&, std::i
 struct KernelTable {
   RelaxChunksFn relax[2];
   MMChunksFn mm[2];
+  MMChunksFn mm_extrapolated[2];  ///< MMStep::ya set; null where the table has none
 };
 
 extern const KernelTable kScalarKernels;  // scalar.cpp

@@ -74,10 +74,18 @@ class LaneCore {
   void init(const double* x, double* y, double* w) const {
     detail::with_dim(prob_.dim(), [&](auto P) { init_p<decltype(P)::value>(x, y, w); });
   }
-  // One MM step from v (ghost rows included) into xout; y and w in place.
-  void step(const double* v, double* xout, double* y, double* w) {
+  // Whether step() forms the extrapolated edge variables itself (the kernels
+  // in use read ya + beta (ya - yb) on the fly: one pass over y fewer).
+  bool extrapolates_y() const { return detail::mm_chunks_extrapolate(lanes_); }
+  // One MM step from v (ghost rows included) into xout; w in place; y in
+  // place, or, with ya given, from ya + beta (ya - yb) into y.
+  void step(const double* v, double* xout, double* y, double* w, const double* ya = nullptr,
+            const double* yb = nullptr, double beta = 0) {
     std::fill(norms_.begin(), norms_.end(), 0.0);
-    const detail::MMStep st{v, xout, y, w, (L_ - 1.0) / L_, 1.0 / L_, norms_.data(), false};
+    detail::MMStep st{v, xout, y, w, (L_ - 1.0) / L_, 1.0 / L_, norms_.data(), false};
+    st.ya = ya;
+    st.yb = yb;
+    st.beta = beta;
     detail::mm_chunks(prob_, lanes_, 0, lanes_.size(), st);
   }
   void add_terms(const double* x, const double* y, const double* w, std::int64_t c0, std::int64_t c1,
@@ -176,7 +184,9 @@ class ModelCore {
   std::int64_t split() const { return prob_.graph().num_interior(); }
   std::int64_t bytes() const { return std::int64_t(sizeof(double)) * prob_.num_owned(); }
   void init(const double* x, double* y, double* w) const { k_.init(x, y, w); }
-  void step(const double* v, double* xout, double* y, double* w) {
+  bool extrapolates_y() const { return false; }
+  void step(const double* v, double* xout, double* y, double* w, const double* = nullptr, const double* = nullptr,
+            double = 0) {
     double d, s;
     k_.step(v, xout, y, w, &d, &s);
   }
@@ -215,8 +225,12 @@ class MMAccel final : public Algorithm {
   // Extrapolate, one MM step from there, exchange the new rows, accept or reject.
   void iterate() override {
     const double beta = t_ == 0 ? 0.0 : double(t_) / double(t_ + 3);
-    const double* v = extrapolate(beta);
-    core_.step(v, x_[kOut].data(), y_[kWork].data(), w_[kWork].data());
+    const bool fused = beta > 0 && core_.extrapolates_y();  // the kernel forms y's extrapolation
+    const double* v = extrapolate(beta, !fused);
+    if (fused)
+      core_.step(v, x_[kOut].data(), y_[kWork].data(), w_[kWork].data(), y_[kCur].data(), y_[kPrev].data(), beta);
+    else
+      core_.step(v, x_[kOut].data(), y_[kWork].data(), w_[kWork].data());
     const Costs c = surrogate(kOut);  // exchanges the new rows (the iteration's message)
     if (beta > 0 && !(c.F <= F_ && c.f <= f_)) {  // F or f would rise: keep x(k), restart
       restart();
@@ -295,10 +309,11 @@ class MMAccel final : public Algorithm {
 
   enum { kCur = 0, kPrev = 1, kOut = 2, kWork = 2, kV = 3 };  // x_: 4 buffers; y_, w_: 3
 
-  // The extrapolated point into the work buffers: y and w always (the kernel
-  // updates them in place), x (ghost rows too, from the exchanged rows of z(k)
-  // and z(k-1): no extra message) only when beta > 0.
-  const double* extrapolate(double beta) {
+  // The extrapolated point into the work buffers: w always and y where
+  // with_y (the kernel updates them in place; without, the kernel forms y's
+  // itself), x (ghost rows too, from the exchanged rows of z(k) and z(k-1):
+  // no extra message) only when beta > 0.
+  const double* extrapolate(double beta, bool with_y) {
     auto blend = [beta](const std::vector<double>& a, const std::vector<double>& b, std::vector<double>& out) {
       for (std::size_t i = 0; i < a.size(); ++i) out[i] = a[i] + beta * (a[i] - b[i]);
     };
@@ -307,7 +322,7 @@ class MMAccel final : public Algorithm {
       w_[kWork] = w_[kCur];
       return x_[kCur].data();
     }
-    blend(y_[kCur], y_[kPrev], y_[kWork]);
+    if (with_y) blend(y_[kCur], y_[kPrev], y_[kWork]);
     blend(w_[kCur], w_[kPrev], w_[kWork]);
     blend(x_[kCur], x_[kPrev], x_[kV]);
     return x_[kV].data();

@@ -246,6 +246,68 @@ TEST_P(KernelsByDim, SimdMMStepEqualsScalarBitForBit) {
   for (int c = 1; c < dim; ++c) EXPECT_EQ(ya[nl.at(10, 0, dim, c)], 0.0);
 }
 
+// mm-accel's extrapolating step (MMStep::ya): forming ya + beta (ya - yb) in
+// the kernel gives the bits of a separate blend pass followed by the in-place
+// step, on the scalar and (where the layout has one: AVX2) the SIMD path, every
+// real slot, x(t+1), the anchor variables and the norms; ya and yb are not
+// written.
+TEST_P(KernelsByDim, ExtrapolatingMMStepEqualsBlendThenStep) {
+  std::mt19937_64 gen(13);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const auto x = awkward_rows(prob, 6);
+  std::vector<double> ycur(std::size_t(nl.groups()) * nl.lanes * dim), yprev(ycur.size()),
+      aw0(prob.anchor_ranges().size() * dim);
+  for (auto& v : ycur) v = u(gen);
+  for (auto& v : yprev) v = u(gen);
+  for (auto& v : aw0) v = u(gen);
+  const double beta = 0.7;
+  const auto& off = prob.graph().offsets();
+  for (bool simd : {false, true}) {
+    if (simd && !have_simd()) continue;
+    const bool had = detail::set_simd_enabled(simd);
+    if (!detail::mm_chunks_extrapolate(nl)) {  // the AVX-512 layout: mm-accel blends y in its own pass
+      detail::set_simd_enabled(had);
+      ASSERT_TRUE(simd) << "the scalar kernels always extrapolate";
+      continue;
+    }
+    auto step = [&](bool fused, std::vector<double>* y, std::vector<double>* aw, std::vector<double>* xn,
+                    std::vector<double>* norms) {
+      y->assign(ycur.size(), -3.0);
+      if (!fused)
+        for (std::size_t i = 0; i < y->size(); ++i) (*y)[i] = ycur[i] + beta * (ycur[i] - yprev[i]);
+      *aw = aw0;
+      xn->assign(x.size(), -7.0);
+      norms->assign(16, 0.0);
+      detail::MMStep st{x.data(), xn->data(), y->data(), aw->data(), 0.9, 0.1, norms->data(), false};
+      if (fused) {
+        st.ya = ycur.data();
+        st.yb = yprev.data();
+        st.beta = beta;
+      }
+      detail::mm_chunks(prob, nl, 0, nl.split, st);
+      detail::mm_chunks(prob, nl, nl.split, nl.size(), st);
+    };
+    const std::vector<double> ycur0 = ycur, yprev0 = yprev;
+    std::vector<double> yf, awf, xf, nf, yb, awb, xb, nb;
+    step(true, &yf, &awf, &xf, &nf);
+    step(false, &yb, &awb, &xb, &nb);
+    detail::set_simd_enabled(had);
+    EXPECT_TRUE(same_bits(xf, xb)) << "simd " << simd;
+    EXPECT_TRUE(same_bits(awf, awb)) << "simd " << simd;
+    EXPECT_TRUE(same_bits(nf, nb)) << "simd " << simd;
+    EXPECT_TRUE(same_bits(ycur, ycur0) && same_bits(yprev, yprev0)) << "simd " << simd;
+    int differs = 0;
+    for (LocalId v = 0; v < prob.num_owned(); ++v)
+      for (auto e = off[v]; e < off[v + 1]; ++e)
+        for (int c = 0; c < dim; ++c) {
+          const std::size_t at = nl.at(v, e - off[v], dim, c);
+          differs += !same_bits(yf[at], yb[at]);
+          differs += yf[at] == -3.0;  // every real slot written
+        }
+    EXPECT_EQ(differs, 0) << "simd " << simd;
+  }
+}
+
 // mm-accel's acceptance costs per chunk: each lane holds its node's sums over
 // its forward slots in slot order (checked against a plain loop over the CSR),
 // and the AVX2 path gives the scalar twin's bits, the awkward rows included.
