@@ -117,31 +117,10 @@ class MM final : public Algorithm {
 
   template <int P>
   void init() {
-    const auto& gr = prob_.graph();
-    const auto& off = gr.offsets();
-    const auto& adj = gr.adjacency();
     y_.assign(std::size_t(lanes_.groups()) * lanes_.lanes * P, 0.0);
     aw_.assign(prob_.anchor_ranges().size() * P, 0.0);
-    for (LocalId v = 0; v < gr.num_owned(); ++v) {
-      for (auto e = off[v]; e < off[v + 1]; ++e) {
-        const LocalId i = oriented_first(v, adj[e]), j = i == v ? adj[e] : v;
-        double y[P];
-        for (int c = 0; c < P; ++c) y[c] = x_[std::size_t(i) * P + c] - x_[std::size_t(j) * P + c];
-        project_sphere<P>(gr.edge_value(e), y);
-        for (int c = 0; c < P; ++c) y_[y_index(v, e, c)] = y[c];
-      }
-      const auto& aoff = prob_.anchor_offsets();
-      for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
-        const double* a = &prob_.anchors()[std::size_t(prob_.anchor_ids()[e]) * P];
-        double* w = &aw_[std::size_t(e) * P];
-        for (int c = 0; c < P; ++c) w[c] = x_[std::size_t(v) * P + c] - a[c];
-        project_sphere<P>(prob_.anchor_ranges()[e], w);
-      }
-    }
-  }
-
-  LocalId oriented_first(LocalId v, LocalId u) const {
-    return prob_.graph().global_id(v) < prob_.graph().global_id(u) ? v : u;
+    detail::best_edge_variables<P>(prob_, x_.data(),
+                                   [&](LocalId v, std::int64_t e, int c) { return &y_[y_index(v, e, c)]; }, aw_.data());
   }
 
   // F(z) = 1/2 sum ||x_i - x_j - y_e||^2 + 1/2 sum ||x_i - a_k - w_ik||^2 (000, eq. 2).

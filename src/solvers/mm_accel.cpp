@@ -94,29 +94,10 @@ class LaneCore {
   }
 
  private:
-  // y_e = P_sphere(d_e)(x_i - x_j), w_ik = P_sphere(r_ik)(x_i - a_k) (as MM).
   template <int P>
   void init_p(const double* x, double* yv, double* wv) const {
-    const auto& gr = prob_.graph();
-    const auto& off = gr.offsets();
-    const auto& adj = gr.adjacency();
-    for (LocalId v = 0; v < gr.num_owned(); ++v) {
-      for (auto e = off[v]; e < off[v + 1]; ++e) {
-        const bool fwd = gr.global_id(v) < gr.global_id(adj[e]);
-        const LocalId i = fwd ? v : adj[e], j = fwd ? adj[e] : v;
-        double y[P];
-        for (int c = 0; c < P; ++c) y[c] = x[std::size_t(i) * P + c] - x[std::size_t(j) * P + c];
-        project_sphere<P>(gr.edge_value(e), y);
-        for (int c = 0; c < P; ++c) yv[y_index(v, e, c)] = y[c];
-      }
-      const auto& aoff = prob_.anchor_offsets();
-      for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
-        const double* a = &prob_.anchors()[std::size_t(prob_.anchor_ids()[e]) * P];
-        double* w = &wv[std::size_t(e) * P];
-        for (int c = 0; c < P; ++c) w[c] = x[std::size_t(v) * P + c] - a[c];
-        project_sphere<P>(prob_.anchor_ranges()[e], w);
-      }
-    }
+    detail::best_edge_variables<P>(prob_, x, [&](LocalId v, std::int64_t e, int c) { return &yv[y_index(v, e, c)]; },
+                                   wv);
   }
 
   // Chunks [c0, c1) of the lane layout: each sensor edge at the slot oriented

@@ -257,22 +257,7 @@ void edge_update(double delta, const double* dz, double sgn, double weight, doub
 
 template <int P>
 void ModelMMKernel::init_p(const double* x, double* y, double* aw) const {
-  const auto& gr = prob_.graph();
-  const auto& off = gr.offsets();
-  const auto& aoff = prob_.anchor_offsets();
-  for (LocalId v = 0; v < gr.num_owned(); ++v) {
-    for (auto e = off[v]; e < off[v + 1]; ++e) {
-      double* ye = &y[std::size_t(e) * P];
-      oriented_diff<P>(prob_, x, v, gr.adjacency()[e], ye);
-      project_sphere<P>(gr.edge_value(e), ye);
-    }
-    for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
-      const double* a = &prob_.anchors()[std::size_t(prob_.anchor_ids()[e]) * P];
-      double* w = &aw[std::size_t(e) * P];
-      for (int c = 0; c < P; ++c) w[c] = x[std::size_t(v) * P + c] - a[c];
-      project_sphere<P>(prob_.anchor_ranges()[e], w);
-    }
-  }
+  best_edge_variables<P>(prob_, x, [&](LocalId, std::int64_t e, int c) { return &y[std::size_t(e) * P + c]; }, aw);
 }
 
 template <int P>
