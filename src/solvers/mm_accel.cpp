@@ -163,13 +163,12 @@ class ModelCore {
   std::size_t y_index(LocalId, std::int64_t e, int c) const { return std::size_t(e) * prob_.dim() + c; }
   std::int64_t chunks() const { return prob_.num_owned(); }
   std::int64_t split() const { return prob_.graph().num_interior(); }
-  std::int64_t bytes() const { return std::int64_t(sizeof(double)) * prob_.num_owned(); }
+  std::int64_t bytes() const { return k_.bytes(); }
   void init(const double* x, double* y, double* w) const { k_.init(x, y, w); }
   bool extrapolates_y() const { return false; }
   void step(const double* v, double* xout, double* y, double* w, const double* = nullptr, const double* = nullptr,
             double = 0) {
-    double d, s;
-    k_.step(v, xout, y, w, &d, &s);
+    k_.step(v, xout, y, w, nullptr, nullptr);
   }
   void add_terms(const double* x, const double* y, const double* w, std::int64_t c0, std::int64_t c1,
                  detail::ExactSum* F) const {

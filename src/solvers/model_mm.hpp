@@ -18,13 +18,15 @@ class ModelMMKernel {
   explicit ModelMMKernel(const LocalizationProblem& prob);
   /// 2 max_i sum_j w_ij + max_i sum_k w_ik + 2: the reported constant (the steps are per node).
   double lipschitz() const { return L_; }
+  /// What the kernel itself holds (1/D_x per owned node).
+  std::int64_t bytes() const { return static_cast<std::int64_t>(sizeof(double) * dinv_.capacity()); }
   /// y (p per CSR slot) and aw (p per anchor measurement) at their best
   /// values for x (ghost rows included): y_e = P_sphere(d_e)(x_i - x_j) in the
   /// orientation i < j (global ids), aw_ik = P_sphere(r_ik)(x_i - a_k). There
   /// the surrogate equals the ML cost.
   void init(const double* x, double* y, double* aw) const;
   /// One MM step from (x, y, aw): x(t+1) into xn (owned rows), y and aw in
-  /// place; *d = ||xn - x||^2 and *s = ||xn||^2 over the owned rows.
+  /// place; *d = ||xn - x||^2 and *s = ||xn||^2 over the owned rows (where given).
   void step(const double* x, double* xn, double* y, double* aw, double* d, double* s) const;
   /// Owned nodes [v0, v1): the surrogate's terms w rho(|dz - y|) into *F and,
   /// if f is given, the ML cost's w rho(||dz| - d|) into *f; each sensor edge

@@ -176,8 +176,8 @@ class ModelMM final : public Algorithm {
     *s = x_sq_;
   }
   std::int64_t memory_bytes() const override {
-    return static_cast<std::int64_t>(sizeof(double) * (x_.capacity() + xn_.capacity() + y_.capacity() + aw_.capacity() +
-                                                       std::size_t(prob_.num_owned())));
+    return static_cast<std::int64_t>(sizeof(double) * (x_.capacity() + xn_.capacity() + y_.capacity() + aw_.capacity())) +
+           k_.bytes();
   }
   void save(StateWriter& w) const override {
     const int p = prob_.dim();
@@ -286,8 +286,8 @@ void ModelMMKernel::step_p(const double* x, double* xn, double* y, double* aw, d
       s += xn[t] * xn[t];
     }
   }
-  *dsq = d;
-  *ssq = s;
+  if (dsq) *dsq = d;
+  if (ssq) *ssq = s;
 }
 
 template <int P>
