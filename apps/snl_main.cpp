@@ -14,6 +14,7 @@
 #include "snl/cli/commands.hpp"
 #include "snl/cli/consensus.hpp"
 #include "snl/io/h5file.hpp"
+#include "snl/core/memory.hpp"
 #include "snl/core/mpi_util.hpp"
 
 namespace {
@@ -428,6 +429,7 @@ int run_consensus(int argc, char** argv, MPI_Comm comm) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  snl::tune_allocator(argv);  // may re-execute the program (snl/core/memory.hpp)
   MPI_Init(&argc, &argv);
   MPI_Comm comm = MPI_COMM_WORLD;
   snl::h5_quiet();

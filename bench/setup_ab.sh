@@ -9,19 +9,29 @@
 #     WORK=/tmp/snl-ab bench/setup_ab.sh
 # NPS_BIG / BIG_FROM: rank counts for networks of at least BIG_FROM sensors
 # (default: NPS). One JSON line per run in $WORK/records.jsonl; one text line
-# per run on stdout.
+# per run on stdout. More builds or settings: LABELS="A B C" with C=... and,
+# for any label, L_ENV="VAR=value ..." set for its runs only (e.g.
+# C=build/bin/snl C_ENV=SNL_MALLOC=system: the same binary on the system
+# allocator's defaults).
 set -euo pipefail
 : "${A:?A: the first snl binary}" "${B:?B: the second snl binary}" "${NETS:?NETS: network files}"
 NPS=${NPS:-"1 2"}
 NPS_BIG=${NPS_BIG:-$NPS}
 BIG_FROM=${BIG_FROM:-5000000}
 REPS=${REPS:-2}
+LABELS=${LABELS:-"A B"}
 WORK=${WORK:-/tmp/snl-ab}
 PY=/usr/bin/python3
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 mkdir -p "$WORK"
 rec="$WORK/records.jsonl"
-echo "# $(date -u +%FT%TZ) A=$A B=$B $(nproc) cores, load: $(cut -d' ' -f1-3 /proc/loadavg)"
+envs=""
+for l in $LABELS; do
+  : "${!l:?$l: an snl binary}"
+  ev=${l}_ENV
+  envs+=" $l=${!l}${!ev:+ (${!ev})}"
+done
+echo "# $(date -u +%FT%TZ)$envs, $(nproc) cores, load: $(cut -d' ' -f1-3 /proc/loadavg)"
 for net in $NETS; do
   n=$("$A" info "$net" | sed -n 's/.*sensors n = \([0-9]*\).*/\1/p')
   nps=$NPS
@@ -29,10 +39,12 @@ for net in $NETS; do
   ref=""
   for rep in $(seq "$REPS"); do
     for np in $nps; do
-      for which in A B; do
+      for which in $LABELS; do
         bin=${!which}
+        ev=${which}_ENV
         out="$WORK/r_${n}_${np}_${which}${rep}"
-        /usr/bin/time -f "%e" -o "$out.time" mpirun -np "$np" --oversubscribe "$bin" solve "$net" -o "$out.h5" \
+        # shellcheck disable=SC2086  # L_ENV is a list of VAR=value words
+        /usr/bin/time -f "%e" -o "$out.time" env ${!ev:-} mpirun -np "$np" --oversubscribe "$bin" solve "$net" -o "$out.h5" \
           --partition metis --max-iter 1 --tol 0 -q --json "$out.json"
         [ -n "$ref" ] || ref="$out.h5"
         $PY - "$out" "$ref" "$n" "$np" "$which" "$rep" "$(cat "$out.time")" "$(cut -d' ' -f1 /proc/loadavg)" "$rec" <<'PYEOF'
@@ -41,12 +53,12 @@ out, ref, n, np_, which, rep, wall, load, rec = sys.argv[1:]
 j = json.load(open(out + ".json"))
 same = h5py.File(out + ".h5", "r")["positions"][()].tobytes() == h5py.File(ref, "r")["positions"][()].tobytes()
 r = {"n": int(n), "ranks": int(np_), "build": which, "rep": int(rep), "wall": float(wall), "load1": float(load),
-     "positions_equal_first_A": same}
+     "positions_equal_first_A": same, "allocator": j.get("allocator", "system")}
 r.update({k: v for k, v in j.items() if k.startswith("setup_") or k == "peak_rss_bytes_per_rank"})
 with open(rec, "a") as f:
     f.write(json.dumps(r) + "\n")
 g = lambda k: r.get("setup_graph." + k + "_seconds", 0)
-print(f"n={n} np={np_} {which}{rep} load {load}: wall {r['wall']:.2f} s, setup {r['setup_seconds']:.2f}, "
+print(f"n={n} np={np_} {which}{rep} ({r['allocator']}) load {load}: wall {r['wall']:.2f} s, setup {r['setup_seconds']:.2f}, "
       f"graph {r['setup_graph_seconds']:.2f} (exchange {g('exchange'):.2f}, lists {g('lists'):.2f}, "
       f"order {g('order'):.2f}, csr {g('csr'):.2f}), build bytes/rank {max(r['setup_graph_build_bytes_per_rank'])}, "
       f"peak RSS/rank {max(r['peak_rss_bytes_per_rank'])}, same positions {same}")

@@ -9,6 +9,7 @@
 #include "core/json.hpp"
 #include "kernels/kernels.hpp"
 #include "snl/cli/commands.hpp"
+#include "snl/core/memory.hpp"
 #include "snl/io/network.hpp"
 #include "snl/io/result_io.hpp"
 
@@ -325,7 +326,8 @@ std::string json_summary(const SolveCommand& cmd, const LoadedProblem& lp, const
       .add("problem_bytes", static_cast<std::int64_t>(m.tot[2]))
       .add("algorithm_state_bytes", static_cast<std::int64_t>(s.algorithm_state_bytes))
       .add("state_bytes_per_sensor", (double(m.tot[2]) + double(s.algorithm_state_bytes)) / n_sens)
-      .add("local_order", default_local_ordering() == LocalOrdering::kRcm ? "rcm" : "gid");
+      .add("local_order", default_local_ordering() == LocalOrdering::kRcm ? "rcm" : "gid")
+      .add("allocator", allocator_mode());
   for (const auto& ph : s.phase_iterate_seconds) j.add(ph.first + "_iterate_seconds", ph.second);
   for (const auto& ph : s.phase_traffic_bytes)
     if (std::isfinite(ph.second)) j.add(ph.first + "_traffic_bytes_per_iteration", ph.second);

@@ -303,10 +303,12 @@ GlobalId route_edges(MPI_Comm comm, const OwnerDirectory& dir, const std::vector
                    [&](std::size_t k) { return block_owner(n, size, pairs[k].a); }, half, half_vals);
     }
   }
-  for (auto& h : half) {
-    const auto& s = dir.local(h.a);
-    h.oa = s.owner;
-    h.ia = s.index;
+  constexpr std::size_t kAhead = 16;  // directory lookups in flight (OwnerDirectory::prefetch)
+  for (std::size_t k = 0; k < half.size(); ++k) {
+    if (k + kAhead < half.size()) dir.prefetch(half[k + kAhead].a);
+    const auto& s = dir.local(half[k].a);
+    half[k].oa = s.owner;
+    half[k].ia = s.index;
   }
   std::vector<HalfTagged> at_b;
   std::vector<double> at_b_vals;
@@ -316,11 +318,15 @@ GlobalId route_edges(MPI_Comm comm, const OwnerDirectory& dir, const std::vector
   // edges are counted first, so that their second copies go straight after
   // the first ones (no reallocation of the whole array).
   GlobalId cut = 0;
-  for (const auto& h : at_b) cut += h.oa != dir.local(h.b).owner;
+  for (std::size_t k = 0; k < at_b.size(); ++k) {
+    if (k + kAhead < at_b.size()) dir.prefetch(at_b[k + kAhead].b);
+    cut += at_b[k].oa != dir.local(at_b[k].b).owner;
+  }
   const std::size_t n_first = at_b.size();
   std::vector<EdgeRec> full(n_first + static_cast<std::size_t>(cut));
   at_b_vals.resize(full.size() * width);
   for (std::size_t k = 0, d = n_first; k < n_first; ++k) {
+    if (k + kAhead < n_first) dir.prefetch(at_b[k + kAhead].b);
     const auto& h = at_b[k];
     const auto& s = dir.local(h.b);
     full[k] = {h.a, h.b, h.oa, h.ia, s.owner, s.index};

@@ -64,6 +64,10 @@ class OwnerDirectory {
   GlobalId block_end() const { return begin_ + static_cast<GlobalId>(slots_.size()); }
   /// The slot of a node of this rank's block.
   const Slot& local(GlobalId g) const { return slots_[static_cast<std::size_t>(g - begin_)]; }
+  /// Starts loading local(g)'s cache line: loops over edges in random order
+  /// issue it a few records ahead so that lookups overlap (at 10M the slots
+  /// are 40 MB per rank, beyond the caches).
+  void prefetch(GlobalId g) const { __builtin_prefetch(slots_.data() + (g - begin_)); }
   /// Collective: this rank's nodes in ascending global id (slot index order).
   std::vector<GlobalId> owned_nodes() const;
   /// Collective: nodes per rank (on every rank).

@@ -1,0 +1,79 @@
+#include "snl/core/memory.hpp"
+
+#include <cstdlib>
+#include <cstring>
+#include <string>
+
+// glibc's malloc is the one tuned; a sanitizer replaces it with its own.
+#if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
+#define SNL_GLIBC_MALLOC 1
+#include <malloc.h>
+#include <unistd.h>
+#endif
+
+namespace snl {
+
+namespace {
+constexpr const char* kHugetlb = "glibc.malloc.hugetlb";
+bool has_hugetlb(const char* tunables) { return tunables && std::strstr(tunables, kHugetlb) != nullptr; }
+// Whether GLIBC_TUNABLES sets glibc.malloc.hugetlb to a non-zero value.
+bool hugetlb_on(const char* tunables) {
+  const char* at = tunables ? std::strstr(tunables, kHugetlb) : nullptr;
+  if (!at) return false;
+  at += std::strlen(kHugetlb);
+  return *at == '=' && at[1] != '\0' && at[1] != '0';
+}
+// The environment this process started with (tune_allocator records it before
+// it adds the tunable; -1: not recorded, read the environment).
+int started_with_hugetlb = -1;
+bool opted_out() {
+  const char* opt = std::getenv("SNL_MALLOC");
+  return opt && std::strcmp(opt, "system") == 0;
+}
+}  // namespace
+
+void tune_allocator(char** argv) {
+#if defined(SNL_GLIBC_MALLOC)
+  const char* tunables = std::getenv("GLIBC_TUNABLES");
+  started_with_hugetlb = hugetlb_on(tunables) ? 1 : 0;
+  if (opted_out()) return;
+  if (has_hugetlb(tunables) || std::getenv("SNL_MALLOC_REEXEC")) return;  // chosen, or already tried once
+  std::string t = tunables && *tunables ? std::string(tunables) + ":" : std::string();
+  t += "glibc.malloc.hugetlb=1";
+  if (setenv("GLIBC_TUNABLES", t.c_str(), 1) != 0 || setenv("SNL_MALLOC_REEXEC", "1", 1) != 0) return;
+  execv("/proc/self/exe", argv);
+  // exec failed (no /proc): run on untuned; the guard stays set for children.
+#else
+  (void)argv;
+#endif
+}
+
+const char* allocator_mode() {
+#if defined(SNL_GLIBC_MALLOC)
+  const bool on = started_with_hugetlb < 0 ? hugetlb_on(std::getenv("GLIBC_TUNABLES")) : started_with_hugetlb == 1;
+  return on ? "hugetlb" : "system";
+#else
+  return "other";  // a sanitizer's or another C library's allocator
+#endif
+}
+
+ReuseFreedMemory::ReuseFreedMemory() : active_(!opted_out()) {
+#if defined(SNL_GLIBC_MALLOC)
+  if (!active_) return;
+  mallopt(M_MMAP_MAX, 0);
+  mallopt(M_TRIM_THRESHOLD, -1);  // mallopt(3): -1 disables trimming
+#endif
+}
+
+ReuseFreedMemory::~ReuseFreedMemory() {
+#if defined(SNL_GLIBC_MALLOC)
+  if (!active_) return;
+  // glibc's documented defaults (mallopt(3)); the dynamic mmap threshold is
+  // not re-enabled, so blocks of 128 KiB and more are mapped from here on.
+  mallopt(M_MMAP_MAX, 65536);
+  mallopt(M_TRIM_THRESHOLD, 128 * 1024);
+  malloc_trim(0);
+#endif
+}
+
+}  // namespace snl
