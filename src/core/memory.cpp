@@ -41,8 +41,14 @@ void tune_allocator(char** argv) {
   std::string t = tunables && *tunables ? std::string(tunables) + ":" : std::string();
   t += "glibc.malloc.hugetlb=1";
   if (setenv("GLIBC_TUNABLES", t.c_str(), 1) != 0 || setenv("SNL_MALLOC_REEXEC", "1", 1) != 0) return;
-  execv("/proc/self/exe", argv);
-  // exec failed (no /proc): run on untuned; the guard stays set for children.
+  // The binary's own path, not /proc/self/exe: the process name (ps, pkill,
+  // a batch system's tracking) is the basename of the path executed.
+  char self[4096];
+  const ssize_t len = readlink("/proc/self/exe", self, sizeof self - 1);
+  if (len <= 0) return;
+  self[len] = '\0';
+  execv(self, argv);
+  // exec failed: run untuned; the guard stays set for children.
 #else
   (void)argv;
 #endif
