@@ -113,7 +113,7 @@ void add_solve(CLI::App& app, Commands& c) {
   s->add_option("--seed", c.solve.solver.seed, "seed of --init random and of the async activation clock")
       ->capture_default_str();
   s->add_option("--partition", c.solve.partition,
-                "auto|metis|parmetis|block (auto: metis on one node up to 4M sensors, else parmetis)")
+                "auto|metis|parmetis|block (auto: metis on one node up to 16M sensors, else parmetis)")
       ->capture_default_str();
   s->add_option("--history-every", c.solve.solver.history_every, "record history every K iterations (0: auto)")
       ->capture_default_str();

@@ -193,6 +193,8 @@ namespace {
 /// Sorts rows (a, b, r) by (a, b, r) and merges the rows of equal (a, b): the
 /// mean of their ranges, or with sigmas the inverse-variance weighted mean and
 /// the combined sigma; NLOS flags are or-ed. Returns the number of rows removed.
+constexpr std::size_t kMaxRuns = 64;  // beyond this many ascending runs, one sort
+
 GlobalId merge_rows(std::vector<GlobalId>& edges, std::vector<double>& ranges, MeasurementExtras x) {
   const std::size_t E = ranges.size();
   if (edges.size() != 2 * E) throw Error("merge_duplicates: edges and ranges disagree in length");
@@ -201,10 +203,12 @@ GlobalId merge_rows(std::vector<GlobalId>& edges, std::vector<double>& ranges, M
   if ((sg && sg->size() != E) || (fl && fl->size() != E))
     throw Error("merge_duplicates: per-row sigmas or flags disagree in length with the ranges");
   // Fast path: already sorted with distinct pairs (e.g. generator output).
-  bool sorted = true;
-  for (std::size_t e = 1; e < E && sorted; ++e)
-    sorted = std::tie(edges[2 * e - 2], edges[2 * e - 1]) < std::tie(edges[2 * e], edges[2 * e + 1]);
-  if (sorted) return 0;
+  // Else the starts of the ascending runs: rows gathered from P ranks' sorted
+  // slabs come in P runs, which are merged instead of sorted.
+  std::vector<std::size_t> runs{0};
+  for (std::size_t e = 1; e < E && runs.size() <= kMaxRuns; ++e)
+    if (std::tie(edges[2 * e - 2], edges[2 * e - 1]) >= std::tie(edges[2 * e], edges[2 * e + 1])) runs.push_back(e);
+  if (runs.size() == 1) return 0;
 
   struct Row {
     GlobalId a, b;
@@ -216,9 +220,27 @@ GlobalId merge_rows(std::vector<GlobalId>& edges, std::vector<double>& ranges, M
     rows[e] = {edges[2 * e], edges[2 * e + 1], ranges[e], sg ? (*sg)[e] : 1.0, fl ? (*fl)[e] : std::uint8_t{0}};
   // Ranges (then sigmas) are part of the key, so equal pairs meet in a fixed
   // order and the merged value does not depend on the order of the input rows.
-  std::sort(rows.begin(), rows.end(), [](const Row& p, const Row& q) {
+  auto less = [](const Row& p, const Row& q) {
     return std::tie(p.a, p.b, p.r, p.sigma, p.flag) < std::tie(q.a, q.b, q.r, q.sigma, q.flag);
-  });
+  };
+  if (runs.size() > kMaxRuns) {
+    std::sort(rows.begin(), rows.end(), less);
+  } else {
+    // A run is ascending in (a, b) with distinct pairs: in the full key too.
+    // Adjacent runs are merged pairwise until one is left (log2 of the runs
+    // passes over the rows).
+    runs.push_back(E);
+    while (runs.size() > 2) {
+      std::vector<std::size_t> next{0};
+      for (std::size_t k = 0; k + 1 < runs.size(); k += 2) {
+        const std::size_t end = k + 2 < runs.size() ? runs[k + 2] : runs[k + 1];
+        if (k + 2 < runs.size())
+          std::inplace_merge(rows.begin() + runs[k], rows.begin() + runs[k + 1], rows.begin() + end, less);
+        next.push_back(end);
+      }
+      runs.swap(next);
+    }
+  }
   std::size_t out = 0;
   for (std::size_t e = 0; e < E;) {
     std::size_t f = e;

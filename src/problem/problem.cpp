@@ -85,26 +85,45 @@ Measurements merge_measurements(MPI_Comm comm, const Network& slab, ProblemRepor
   Measurements m;
   m.has_ssigmas = any_rank(comm, !slab.sensor_sigmas.empty());
   m.has_asigmas = any_rank(comm, !slab.anchor_sigmas.empty());
-  std::vector<std::vector<SensorEdgeRec>> out(size);
-  for (GlobalId e = 0; e < slab.local_sensor_edges(); ++e) {
-    GlobalId a = slab.sensor_edges[2 * e], b = slab.sensor_edges[2 * e + 1];
-    if (a > b) std::swap(a, b);
-    const double sg = slab.sensor_sigmas.empty() ? 0.0 : slab.sensor_sigmas[e];
-    const GlobalId key = (mix64(static_cast<std::uint64_t>(a) * 0x9e3779b97f4a7c15ULL ^ static_cast<std::uint64_t>(b)) & 1)
-                             ? b
-                             : a;
-    out[block_owner(n, size, key)].push_back({a, b, slab.sensor_ranges[e], sg});
-  }
-  auto got = exchange_records(comm, out);
-  test_fail_point("alloc");  // fault-injection tests: one rank runs out of memory between collectives
-  m.sedges.reserve(2 * got.size());
-  m.sranges.reserve(got.size());
-  for (const auto& r : got) {
-    m.sedges.push_back(r.i);
-    m.sedges.push_back(r.j);
-    m.sranges.push_back(r.r);
-    if (m.has_ssigmas) m.ssigmas.push_back(r.s);
-  }
+  {
+    // Counted, then packed straight into one send buffer in rank order: at 10M
+    // the per-rank vectors grew by reallocation and were copied once more to
+    // be sent.
+    const GlobalId ne = slab.local_sensor_edges();
+    auto dest = [&](GlobalId e) {
+      GlobalId a = slab.sensor_edges[2 * e], b = slab.sensor_edges[2 * e + 1];
+      if (a > b) std::swap(a, b);
+      const GlobalId key =
+          (mix64(static_cast<std::uint64_t>(a) * 0x9e3779b97f4a7c15ULL ^ static_cast<std::uint64_t>(b)) & 1) ? b : a;
+      return block_owner(n, size, key);
+    };
+    std::vector<std::int64_t> start(static_cast<std::size_t>(size) + 1, 0);
+    for (GlobalId e = 0; e < ne; ++e) ++start[dest(e) + 1];
+    std::vector<int> scount(size);
+    for (int r = 0; r < size; ++r) {
+      if (start[r + 1] > INT32_MAX) throw Error("merge: more than 2^31 measurements for one rank");
+      scount[r] = static_cast<int>(start[r + 1]);
+      start[r + 1] += start[r];
+    }
+    std::vector<SensorEdgeRec> sbuf(static_cast<std::size_t>(ne));
+    for (GlobalId e = 0; e < ne; ++e) {
+      GlobalId a = slab.sensor_edges[2 * e], b = slab.sensor_edges[2 * e + 1];
+      if (a > b) std::swap(a, b);
+      const double sg = slab.sensor_sigmas.empty() ? 0.0 : slab.sensor_sigmas[e];
+      sbuf[static_cast<std::size_t>(start[dest(e)]++)] = {a, b, slab.sensor_ranges[e], sg};
+    }
+    const std::vector<SensorEdgeRec> got = exchange_packed(comm, std::move(sbuf), scount);
+    test_fail_point("alloc");  // fault-injection tests: one rank runs out of memory between collectives
+    m.sedges.resize(2 * got.size());
+    m.sranges.resize(got.size());
+    if (m.has_ssigmas) m.ssigmas.resize(got.size());
+    for (std::size_t k = 0; k < got.size(); ++k) {
+      m.sedges[2 * k] = got[k].i;
+      m.sedges[2 * k + 1] = got[k].j;
+      m.sranges[k] = got[k].r;
+      if (m.has_ssigmas) m.ssigmas[k] = got[k].s;
+    }
+  }  // the received records are freed before the merge sorts
   std::vector<std::vector<AnchorEdgeRec>> aout(size);
   for (GlobalId e = 0; e < slab.local_anchor_edges(); ++e) {
     const GlobalId i = slab.anchor_edges[2 * e];

@@ -6,6 +6,7 @@
 #include <limits>
 #include <numeric>
 #include <random>
+#include <set>
 
 #include "snl/io/network.hpp"
 
@@ -314,6 +315,54 @@ TEST(Merge, OrderIndependentBitForBit) {
     ASSERT_EQ(sr2.size(), sr.size());
     for (std::size_t e = 0; e < sr.size(); ++e) EXPECT_EQ(sr2[e], sr[e]) << e;
     for (std::size_t e = 0; e < ar.size(); ++e) EXPECT_EQ(ar2[e], ar[e]) << e;
+  }
+}
+
+// Rows that arrive as a few ascending runs (each rank's sorted slab, gathered)
+// are merged run by run instead of sorted; the result must be the sort's, bit
+// for bit, with duplicates across runs, for run counts on both sides of the
+// limit (64) where one sort takes over.
+TEST(Merge, SortedRunsGiveTheSortsResult) {
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> val(0.0, 1.0);
+  for (int runs : {2, 3, 5, 64, 65, 70}) {
+    std::vector<GlobalId> se_runs;
+    std::vector<double> sr_runs;
+    std::vector<std::pair<GlobalId, GlobalId>> all_pairs;
+    std::vector<double> all_ranges;
+    for (int r = 0; r < runs; ++r) {
+      std::set<std::pair<GlobalId, GlobalId>> pairs;  // distinct and ascending within a run
+      std::uniform_int_distribution<int> node(0, 19);
+      while (pairs.size() < 40) {
+        const int i = node(rng), j = node(rng);
+        if (i != j) pairs.insert({std::min(i, j), std::max(i, j)});
+      }
+      for (const auto& pr : pairs) {
+        const double range = val(rng);
+        if (rng() % 2) se_runs.insert(se_runs.end(), {pr.second, pr.first});  // either orientation
+        else se_runs.insert(se_runs.end(), {pr.first, pr.second});
+        sr_runs.push_back(range);
+        all_pairs.push_back(pr);
+        all_ranges.push_back(range);
+      }
+    }
+    // The reference: the same rows in random order (far more than 64 runs: one sort).
+    std::vector<std::size_t> perm(all_ranges.size());
+    std::iota(perm.begin(), perm.end(), 0);
+    std::shuffle(perm.begin(), perm.end(), rng);
+    std::vector<GlobalId> se_ref, ae, ae_ref;
+    std::vector<double> sr_ref, ar, ar_ref;
+    for (std::size_t k : perm) {
+      se_ref.insert(se_ref.end(), {all_pairs[k].first, all_pairs[k].second});
+      sr_ref.push_back(all_ranges[k]);
+    }
+    const MergeStats ref = merge_duplicates(se_ref, sr_ref, ae_ref, ar_ref);
+    const MergeStats st = merge_duplicates(se_runs, sr_runs, ae, ar);
+    EXPECT_GT(ref.merged_sensor_pairs, 0) << runs << " runs: the case needs duplicates across runs";
+    EXPECT_EQ(st.merged_sensor_pairs, ref.merged_sensor_pairs) << runs << " runs";
+    EXPECT_EQ(se_runs, se_ref) << runs << " runs";
+    ASSERT_EQ(sr_runs.size(), sr_ref.size()) << runs << " runs";
+    for (std::size_t e = 0; e < sr_ref.size(); ++e) EXPECT_EQ(sr_runs[e], sr_ref[e]) << runs << " runs, row " << e;
   }
 }
 
