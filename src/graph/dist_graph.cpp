@@ -203,30 +203,6 @@ class PhaseClock {
   double mark_;
 };
 
-// MPI_Alltoallv of a send buffer already in rank order (scount[r] items for
-// rank r) of trivially copyable items; returns what this rank received.
-template <class T>
-std::vector<T> alltoallv_packed(MPI_Comm comm, const std::vector<T>& sbuf, const std::vector<int>& scount) {
-  const int size = comm_size(comm);
-  MPI_Datatype rec;
-  MPI_Type_contiguous(static_cast<int>(sizeof(T)), MPI_BYTE, &rec);
-  MPI_Type_commit(&rec);
-  std::vector<int> rcount(size), sdisp(size), rdisp(size);
-  MPI_Alltoall(scount.data(), 1, MPI_INT, rcount.data(), 1, MPI_INT, comm);
-  std::int64_t rtot = 0, stot = 0;
-  for (int r = 0; r < size; ++r) {
-    sdisp[r] = static_cast<int>(stot);
-    rdisp[r] = static_cast<int>(rtot);
-    stot += scount[r];
-    rtot += rcount[r];
-  }
-  if (rtot > INT32_MAX || stot > INT32_MAX) throw Error("edge exchange: volume exceeds 2^31 records on one rank");
-  std::vector<T> rbuf(static_cast<std::size_t>(rtot));
-  MPI_Alltoallv(sbuf.data(), scount.data(), sdisp.data(), rec, rbuf.data(), rcount.data(), rdisp.data(), rec, comm);
-  MPI_Type_free(&rec);
-  return rbuf;
-}
-
 // Moves records (with `width` values each) to the ranks dest(k) returns for
 // record k; returns what this rank received (rank order, then k order),
 // values alongside. Consumes recs and vals: they are packed straight into one
@@ -260,9 +236,8 @@ void send_records(MPI_Comm comm, std::vector<Rec>&& recs, std::vector<double>&& 
   recs = {};
   vals = {};
   to = {};
-  got = alltoallv_packed(comm, sbuf, scount);
-  sbuf = {};
-  got_vals = alltoallv_packed(comm, svals, vcount);
+  got = exchange_packed(comm, std::move(sbuf), scount);
+  got_vals = exchange_packed(comm, std::move(svals), vcount);
 }
 
 struct HalfTagged {

@@ -226,7 +226,7 @@ std::vector<T> exchange_packed(MPI_Comm comm, std::vector<T>&& sbuf, const std::
     stot += scount[r];
     rtot += rcount[r];
   }
-  if (rtot > INT32_MAX || stot > INT32_MAX) throw Error("exchange_packed: volume exceeds 2^31 records on one rank");
+  if (rtot > INT32_MAX || stot > INT32_MAX) throw Error("record exchange: volume exceeds 2^31 records on one rank");
   std::vector<T> rbuf(static_cast<std::size_t>(rtot));
   MPI_Alltoallv(sbuf.data(), scount.data(), sdisp.data(), rec, rbuf.data(), rcount.data(), rdisp.data(), rec, comm);
   MPI_Type_free(&rec);
