@@ -113,7 +113,8 @@ void add_solve(CLI::App& app, Commands& c) {
   s->add_option("--seed", c.solve.solver.seed, "seed of --init random and of the async activation clock")
       ->capture_default_str();
   s->add_option("--partition", c.solve.partition,
-                "auto|metis|parmetis|block (auto: metis on one node up to 16M sensors, else parmetis)")
+                "auto|metis|bfs|parmetis|block (auto: bfs on one node up to 16M sensors, else parmetis; bfs: "
+                "breadth-first bisection on rank 0, faster than metis, with a larger cut)")
       ->capture_default_str();
   s->add_option("--history-every", c.solve.solver.history_every, "record history every K iterations (0: auto)")
       ->capture_default_str();
@@ -192,7 +193,7 @@ void add_experiment(CLI::App& app, Commands& c) {
   x->add_option("--reach-rel", c.experiment.reach_rel, "relative margin for 'reached the best final cost'")
       ->capture_default_str();
   x->add_option("--seed", c.experiment.seed, "seed of the noise draws and starts")->capture_default_str();
-  x->add_option("--partition", c.experiment.partition, "auto|metis|parmetis|block")->capture_default_str();
+  x->add_option("--partition", c.experiment.partition, "auto|metis|bfs|parmetis|block")->capture_default_str();
   x->add_flag("-q,--quiet", c.experiment.quiet, "no progress output");
 }
 

@@ -14,7 +14,8 @@
 # per run on stdout. More builds or settings: LABELS="A B C" with C=... and,
 # for any label, L_ENV="VAR=value ..." set for its runs only (e.g.
 # C=build/bin/snl C_ENV=SNL_MALLOC=system: the same binary on the system
-# allocator's defaults).
+# allocator's defaults). L_PART: the label's --partition (default: PARTITION,
+# else metis), e.g. A_PART=metis B_PART=bfs with A=B.
 set -euo pipefail
 : "${A:?A: the first snl binary}" "${B:?B: the second snl binary}" "${NETS:?NETS: network files}"
 NPS=${NPS:-"1 2"}
@@ -31,7 +32,8 @@ envs=""
 for l in $LABELS; do
   : "${!l:?$l: an snl binary}"
   ev=${l}_ENV
-  envs+=" $l=${!l}${!ev:+ (${!ev})}"
+  pv=${l}_PART
+  envs+=" $l=${!l}${!ev:+ (${!ev})} --partition ${!pv:-${PARTITION:-metis}}"
 done
 echo "# $(date -u +%FT%TZ)$envs, $(nproc) cores, load: $(cut -d' ' -f1-3 /proc/loadavg)"
 for net in $NETS; do
@@ -44,10 +46,11 @@ for net in $NETS; do
       for which in $LABELS; do
         bin=${!which}
         ev=${which}_ENV
+        pv=${which}_PART
         out="$WORK/r_${n}_${np}_${which}${rep}"
         # shellcheck disable=SC2086  # L_ENV is a list of VAR=value words
         /usr/bin/time -f "%e" -o "$out.time" env ${!ev:-} mpirun -np "$np" --oversubscribe "$bin" solve "$net" -o "$out.h5" \
-          --partition metis --max-iter "${ITERS:-1}" --tol 0 --refine mm -q --json "$out.json"
+          --partition "${!pv:-${PARTITION:-metis}}" --max-iter "${ITERS:-1}" --tol 0 --refine mm -q --json "$out.json"
         [ -n "$ref" ] || ref="$out.h5"
         $PY - "$out" "$ref" "$n" "$np" "$which" "$rep" "$(cat "$out.time")" "$(cut -d' ' -f1 /proc/loadavg)" "$rec" <<'PYEOF'
 import json, sys, h5py
@@ -56,13 +59,14 @@ j = json.load(open(out + ".json"))
 same = h5py.File(out + ".h5", "r")["positions"][()].tobytes() == h5py.File(ref, "r")["positions"][()].tobytes()
 r = {"n": int(n), "ranks": int(np_), "build": which, "rep": int(rep), "wall": float(wall), "load1": float(load),
      "positions_equal_first_A": same, "allocator": j.get("allocator", "system")}
-r.update({k: v for k, v in j.items() if k.startswith("setup_") or k == "peak_rss_bytes_per_rank"})
+r.update({k: v for k, v in j.items() if k.startswith("setup_") or k in ("peak_rss_bytes_per_rank", "partition", "edge_cut", "ghosts")})
 its = max(1, j["iterations"] // 2)  # the pipeline's two phases, ITERS each
 r.update({p + "_ms_per_iteration": 1e3 * j.get(p + "_iterate_seconds", 0) / its for p in ("relaxation", "mm")})
 with open(rec, "a") as f:
     f.write(json.dumps(r) + "\n")
 g = lambda k: r.get("setup_graph." + k + "_seconds", 0)
-print(f"n={n} np={np_} {which}{rep} ({r['allocator']}) load {load}: wall {r['wall']:.2f} s, setup {r['setup_seconds']:.2f}, "
+print(f"n={n} np={np_} {which}{rep} ({r['allocator']}, {r.get('partition')}, cut {r.get('edge_cut')}) load {load}: "
+      f"wall {r['wall']:.2f} s, setup {r['setup_seconds']:.2f} (partition {r['setup_partition_seconds']:.2f}), "
       f"ms/iteration relaxation {r['relaxation_ms_per_iteration']:.2f} MM {r['mm_ms_per_iteration']:.2f}, "
       f"graph {r['setup_graph_seconds']:.2f} (exchange {g('exchange'):.2f}, lists {g('lists'):.2f}, "
       f"order {g('order'):.2f}, csr {g('csr'):.2f}), build bytes/rank {max(r['setup_graph_build_bytes_per_rank'])}, "

@@ -1,5 +1,6 @@
-// Partitioning (METIS on rank 0, ParMETIS through PT-Scotch, block) and the
-// distributed owner directory that DistGraph builds from.
+// Partitioning (METIS or breadth-first level structures on rank 0, ParMETIS
+// through PT-Scotch, block) and the distributed owner directory that DistGraph
+// builds from.
 #include <metis.h>
 
 #include <algorithm>
@@ -21,8 +22,9 @@ PartitionMethod parse_partition_method(const std::string& s) {
   if (s == "metis") return PartitionMethod::kMetis;
   if (s == "block") return PartitionMethod::kBlock;
   if (s == "parmetis") return PartitionMethod::kParMetis;
+  if (s == "bfs") return PartitionMethod::kBfs;
   if (s == "auto") return PartitionMethod::kAuto;
-  throw Error("unknown partition method '" + s + "' (expected auto, metis, parmetis or block)");
+  throw Error("unknown partition method '" + s + "' (expected auto, metis, bfs, parmetis or block)");
 }
 
 bool parmetis_available() {
@@ -48,9 +50,85 @@ int count_nodes(MPI_Comm comm) {
 
 PartitionMethod resolve_partition_method(MPI_Comm comm, GlobalId n, PartitionMethod method) {
   if (method != PartitionMethod::kAuto) return method;
-  if (!parmetis_available()) return PartitionMethod::kMetis;
+  if (!parmetis_available()) return PartitionMethod::kBfs;
   const bool big = n > kAutoParMetisNodes;
-  return (big || count_nodes(comm) > 1) ? PartitionMethod::kParMetis : PartitionMethod::kMetis;
+  return (big || count_nodes(comm) > 1) ? PartitionMethod::kParMetis : PartitionMethod::kBfs;
+}
+
+// ---- Breadth-first level-structure partition ----
+
+std::vector<int> bfs_partition(const std::vector<std::int64_t>& xadj, const std::vector<std::int32_t>& adjncy,
+                               int nparts) {
+  const std::int32_t n = static_cast<std::int32_t>(xadj.size() - 1);
+  // ord: a permutation of the nodes in which every range still to be split is
+  // contiguous. key[v]: a label of v's range, renewed by every pass that
+  // visits v, so that one array (one cache miss per neighbour: the graph's
+  // numbering is random, these loops wait on memory) tells both "in this
+  // range" and "not yet visited".
+  std::vector<std::int32_t> ord(n), key(n, 0), queue(n);
+  std::iota(ord.begin(), ord.end(), 0);
+  std::vector<int> owner(n, 0);
+  struct Range {
+    std::int32_t lo, hi;
+    int p0, p1;
+  };
+  std::vector<Range> todo{{0, n, 0, nparts}};
+  std::int32_t labels = 1;
+  // Breadth-first order of the nodes labelled `from` reachable from root, into
+  // queue[q0, ...), relabelled `to`; returns the end. Rows and labels are
+  // prefetched a few queue places ahead.
+  auto bfs = [&](std::int32_t root, std::int32_t from, std::int32_t to, std::int32_t q0) {
+    std::int32_t head = q0, tail = q0;
+    queue[tail++] = root;
+    key[root] = to;
+    while (head < tail) {
+      if (head + 12 < tail) __builtin_prefetch(&xadj[queue[head + 12]]);
+      if (head + 6 < tail) __builtin_prefetch(&adjncy[xadj[queue[head + 6]]]);
+      if (head + 3 < tail) {
+        const std::int32_t w = queue[head + 3];
+        for (std::int64_t k = xadj[w]; k < xadj[w + 1]; ++k) __builtin_prefetch(&key[adjncy[k]]);
+      }
+      const std::int32_t v = queue[head++];
+      for (std::int64_t k = xadj[v]; k < xadj[v + 1]; ++k) {
+        const std::int32_t u = adjncy[k];
+        if (key[u] == from) {
+          key[u] = to;
+          queue[tail++] = u;
+        }
+      }
+    }
+    return tail;
+  };
+  while (!todo.empty()) {
+    const Range g = todo.back();
+    todo.pop_back();
+    const std::int32_t size = g.hi - g.lo, label = key[ord[g.lo]];
+    if (g.p1 - g.p0 == 1 || size == 0) {
+      for (std::int32_t t = g.lo; t < g.hi; ++t) owner[ord[t]] = g.p0;
+      continue;
+    }
+    // The range in breadth-first order, component by component in the order
+    // of their first nodes in the range; each from a pseudo-peripheral root:
+    // the last node reached from that first node (one sweep of RCM's start).
+    const std::int32_t sweep = labels++, order = labels++;
+    std::int32_t tail = 0;
+    for (std::int32_t t = g.lo; t < g.hi && tail < size; ++t) {
+      if (key[ord[t]] != label) continue;
+      const std::int32_t root = queue[bfs(ord[t], label, sweep, tail) - 1];
+      tail = bfs(root, sweep, order, tail);
+    }
+    std::copy(queue.begin(), queue.begin() + size, ord.begin() + g.lo);
+    // Split in proportion to the parts on each side: the first nodes of the
+    // order (nearest the root) to the lower parts.
+    const int pm = g.p0 + (g.p1 - g.p0) / 2;
+    const std::int32_t mid =
+        g.lo + static_cast<std::int32_t>(static_cast<std::int64_t>(size) * (pm - g.p0) / (g.p1 - g.p0));
+    const std::int32_t left = labels++, right = labels++;
+    for (std::int32_t t = g.lo; t < g.hi; ++t) key[ord[t]] = t < mid ? left : right;
+    todo.push_back({mid, g.hi, pm, g.p1});
+    todo.push_back({g.lo, mid, g.p0, pm});
+  }
+  return owner;
 }
 
 // ---- OwnerDirectory ----
@@ -130,6 +208,29 @@ struct PhaseMarks {
   }
 };
 
+// The undirected graph of the gathered edge pairs as CSR, each row ascending:
+// partitions depend on the neighbour order, and this one does not depend on
+// which rank held which edge.
+template <class Offset, class Index>
+void gathered_csr(GlobalId n, const std::vector<GlobalId>& edges, std::vector<Offset>& xadj,
+                  std::vector<Index>& adjncy) {
+  xadj.assign(static_cast<std::size_t>(n) + 1, 0);
+  adjncy.resize(edges.size());
+  for (std::size_t e = 0; e < edges.size(); e += 2) {
+    ++xadj[edges[e] + 1];
+    ++xadj[edges[e + 1] + 1];
+  }
+  for (GlobalId v = 0; v < n; ++v) xadj[v + 1] += xadj[v];
+  {
+    std::vector<Offset> fill(xadj.begin(), xadj.end() - 1);
+    for (std::size_t e = 0; e < edges.size(); e += 2) {
+      adjncy[fill[edges[e]]++] = static_cast<Index>(edges[e + 1]);
+      adjncy[fill[edges[e + 1]]++] = static_cast<Index>(edges[e]);
+    }
+  }
+  for (GlobalId v = 0; v < n; ++v) std::sort(adjncy.begin() + xadj[v], adjncy.begin() + xadj[v + 1]);
+}
+
 // METIS k-way on rank 0. Returns "" on success, else why it could not run.
 std::string metis_partition(GlobalId n, const std::vector<GlobalId>& edges, int nparts, std::vector<int>& owner,
                             PhaseMarks& phase, std::int64_t& peak) {
@@ -138,22 +239,8 @@ std::string metis_partition(GlobalId n, const std::vector<GlobalId>& edges, int 
   const std::int64_t idx_max = std::numeric_limits<idx_t>::max();
   if (n > idx_max || nnz > idx_max)
     return "graph too large for this METIS build (" + std::to_string(sizeof(idx_t) * 8) + "-bit idx_t)";
-  std::vector<idx_t> xadj(static_cast<std::size_t>(n) + 1, 0), adjncy(static_cast<std::size_t>(nnz));
-  for (std::size_t e = 0; e < edges.size(); e += 2) {
-    ++xadj[edges[e] + 1];
-    ++xadj[edges[e + 1] + 1];
-  }
-  for (GlobalId v = 0; v < n; ++v) xadj[v + 1] += xadj[v];
-  {
-    std::vector<idx_t> fill(xadj.begin(), xadj.end() - 1);
-    for (std::size_t e = 0; e < edges.size(); e += 2) {
-      adjncy[fill[edges[e]]++] = static_cast<idx_t>(edges[e + 1]);
-      adjncy[fill[edges[e + 1]]++] = static_cast<idx_t>(edges[e]);
-    }
-  }
-  // Neighbours in ascending order: METIS's result depends on the order, and
-  // this one does not depend on which rank held which edge.
-  for (GlobalId v = 0; v < n; ++v) std::sort(adjncy.begin() + xadj[v], adjncy.begin() + xadj[v + 1]);
+  std::vector<idx_t> xadj, adjncy;
+  gathered_csr(n, edges, xadj, adjncy);
   phase("metis_graph");
   idx_t nvtxs = static_cast<idx_t>(n), ncon = 1, np = nparts, objval = 0;
   idx_t options[METIS_NOPTIONS];
@@ -176,17 +263,36 @@ std::string metis_partition(GlobalId n, const std::vector<GlobalId>& edges, int 
   return "";
 }
 
-// METIS on rank 0 over the gathered edge lists; each rank gets the owners of
-// its block (scatter). Collective; returns "" on success, else why not.
-std::string metis_on_root(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, std::vector<int>& block,
-                          PhaseMarks& phase, std::int64_t& peak) {
+// Breadth-first level-structure partition on rank 0 (recursive bisection
+// by breadth-first order from a pseudo-peripheral node, George and Liu's
+// level structures): far cheaper than METIS, and on geometric graphs its
+// parts are compact. Returns "" on success, else why it could not run.
+std::string bfs_on_root(GlobalId n, const std::vector<GlobalId>& edges, int nparts, std::vector<int>& owner,
+                        PhaseMarks& phase, std::int64_t& peak) {
+  if (n > std::numeric_limits<std::int32_t>::max()) return "graph too large for the bfs partition on one rank";
+  std::vector<std::int64_t> xadj;
+  std::vector<std::int32_t> adjncy;
+  gathered_csr(n, edges, xadj, adjncy);
+  phase("bfs_graph");
+  peak = static_cast<std::int64_t>(edges.size() * 8 + xadj.size() * 8 + adjncy.size() * 4) + n * 12;
+  owner = bfs_partition(xadj, adjncy, nparts);
+  phase("bfs");
+  return "";
+}
+
+// METIS (or the bfs partition) on rank 0 over the gathered edge lists; each
+// rank gets the owners of its block (scatter). Collective; returns "" on
+// success, else why not.
+std::string partition_on_root(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, PartitionMethod method,
+                              std::vector<int>& block, PhaseMarks& phase, std::int64_t& peak) {
   std::vector<GlobalId> all = gather_to_root(comm, edges);
   phase("gather");
   std::string why;
   std::vector<int> owner;
   if (comm_rank(comm) == 0) {
     try {
-      why = metis_partition(n, all, comm_size(comm), owner, phase, peak);
+      why = method == PartitionMethod::kBfs ? bfs_on_root(n, all, comm_size(comm), owner, phase, peak)
+                                            : metis_partition(n, all, comm_size(comm), owner, phase, peak);
     } catch (const std::bad_alloc&) {
       why = "out of memory building the METIS graph";
     }
@@ -290,20 +396,21 @@ std::vector<int> block_owners(MPI_Comm comm, GlobalId n, const std::vector<Globa
   const int size = comm_size(comm);
   std::vector<int> block;
   std::string why;
-  if (method == PartitionMethod::kMetis && size > 1) {
-    why = metis_on_root(comm, n, edges, block, phase, peak);
-    if (why.empty()) used = "metis";
+  if ((method == PartitionMethod::kMetis || method == PartitionMethod::kBfs) && size > 1) {
+    why = partition_on_root(comm, n, edges, method, block, phase, peak);
+    if (why.empty()) used = method == PartitionMethod::kBfs ? "bfs" : "metis";
   } else if (method == PartitionMethod::kParMetis && size > 1) {
 #ifdef SNL_HAVE_PARMETIS
     // PT-Scotch needs vertices on every rank: tiny graphs go to METIS.
     why = n >= 2 * static_cast<GlobalId>(size) ? parmetis_partition(comm, n, edges, block, phase, peak)
-                                               : metis_on_root(comm, n, edges, block, phase, peak);
+                                               : partition_on_root(comm, n, edges, PartitionMethod::kMetis, block, phase, peak);
     if (why.empty()) used = n >= 2 * static_cast<GlobalId>(size) ? "parmetis" : "metis";
 #else
     why = "this build has no ParMETIS (install libscotchparmetis-dev and libptscotch-dev, then reconfigure)";
 #endif
   } else if (method != PartitionMethod::kBlock) {
-    used = method == PartitionMethod::kParMetis ? "parmetis" : "metis";  // one rank: the trivial partition
+    // One rank: the trivial partition.
+    used = method == PartitionMethod::kParMetis ? "parmetis" : method == PartitionMethod::kBfs ? "bfs" : "metis";
   }
   if (!why.empty()) note = why + "; used the block partition instead";
   if (!why.empty() || block.empty()) {

@@ -1,5 +1,5 @@
 // The solver driver (src/solvers/solver.cpp): bit-identical positions of every
-// algorithm for 1, 2 and 3 ranks (sub-communicators of this run), metis,
+// algorithm for 1, 2 and 3 ranks (sub-communicators of this run), metis, bfs,
 // parmetis and block partitions, SIMD and scalar kernels; the stopping rule and history;
 // option validation.
 #include <gtest/gtest.h>
@@ -24,7 +24,7 @@ TEST(Determinism, BitIdenticalForOneTwoThreeRanks) {
   const Network w = make_network({.n = 120, .dim = 2, .radius = 0.2, .anchor_radius = 0.3, .sigma = 0.05});
   for (const char* alg : {"relaxation", "mm", "mm-accel", "bb", "bb-calafiore", "pipeline", "pm", "async", "async-exact",
                           "esdp-dist"}) {
-    for (PartitionMethod pm : {PartitionMethod::kMetis, PartitionMethod::kBlock}) {
+    for (PartitionMethod pm : {PartitionMethod::kMetis, PartitionMethod::kBfs, PartitionMethod::kBlock}) {
       const auto ref = run(MPI_COMM_SELF, w, alg, 40, pm);
       {  // the portable scalar kernels give the same bits as the SIMD ones
         const bool had = detail::set_simd_enabled(false);

@@ -1,0 +1,20 @@
+#!/usr/bin/python3
+"""Markdown rows of docs/performance.md's partition tables from bench/setup_ab.sh
+records: n, ranks, partition, rep, setup s, partition s (its graph + the call),
+graph build s, edge cut, ghosts, ms per relaxation and MM iteration, peak RSS of
+the largest rank (MiB), positions equal to the first A run's.
+    /usr/bin/python3 bench/setup_ab_rows.py W/records.jsonl ..."""
+import json
+import sys
+
+for f in sys.argv[1:]:
+    print("##", f)
+    for line in open(f):
+        r = json.loads(line)
+        call = r.get("setup_partition.metis_seconds", r.get("setup_partition.bfs_seconds", 0))
+        g = r.get("setup_partition.metis_graph_seconds", r.get("setup_partition.bfs_graph_seconds", 0))
+        print(f"| {r['n'] // 1000000}M | {r['ranks']} | {r['partition']} | {r['rep']} | {r['setup_seconds']:.2f} | "
+              f"{r['setup_partition_seconds']:.2f} ({g:.2f} + {call:.2f}) | {r['setup_graph_seconds']:.2f} | "
+              f"{r['edge_cut']} | {r['ghosts']} | {r['relaxation_ms_per_iteration']:.1f} | "
+              f"{r['mm_ms_per_iteration']:.1f} | {max(r['peak_rss_bytes_per_rank']) / 2**20:.0f} | "
+              f"{'yes' if r['positions_equal_first_A'] else 'NO'} |")

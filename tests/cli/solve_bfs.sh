@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# --partition bfs (breadth-first bisection on rank 0) writes the same positions
+# as METIS on one rank, on 2 and 3 ranks; the JSON names it, its parts are
+# equal to a node, its cut stays within 5 times METIS's on a geometric
+# network, and rank 0 holds the gathered graph as with METIS.
+source "$(dirname "$0")/common.bash"
+"$SNL" generate -o "$T/net.h5" --sensors 3000 --avg-degree 8 --sigma 0.02 --seed 3 -q
+mpi 1 "$SNL" solve "$T/net.h5" -o "$T/ref.h5" --partition metis --max-iter 60 -q --json "$T/ref.json"
+mpi 2 "$SNL" solve "$T/net.h5" -o "$T/m2.h5" --partition metis --max-iter 60 -q --json "$T/m2.json"
+for np in 2 3; do
+  mpi $np "$SNL" solve "$T/net.h5" -o "$T/b$np.h5" --partition bfs --max-iter 60 -q --json "$T/b$np.json"
+done
+$PY - "$T" <<'PYEOF' || fail "bfs run differs or its partition figures are wrong"
+import json, sys, h5py
+t = sys.argv[1]
+ref = h5py.File(f"{t}/ref.h5", "r")["positions"][()].tobytes()
+metis_cut = json.load(open(f"{t}/m2.json"))["edge_cut"]
+ok = True
+for name, np_ in [("b2", 2), ("b3", 3)]:
+    j = json.load(open(f"{t}/{name}.json"))
+    if j["partition"] != "bfs":
+        print(name, "partition", j["partition"]); ok = False
+    if h5py.File(f"{t}/{name}.h5", "r")["positions"][()].tobytes() != ref:
+        print(name, "positions differ from metis on one rank"); ok = False
+    owned = j["memory_owned_sensors_per_rank"]
+    if max(owned) - min(owned) > 2:
+        print(name, "parts not equal:", owned); ok = False
+    if not 0 < j["edge_cut"] <= 5 * metis_cut * (np_ - 1):
+        print(name, "edge cut", j["edge_cut"], "against METIS's", metis_cut, "on 2 ranks"); ok = False
+    part_b = j["setup_partition_bytes_per_rank"]
+    if part_b[0] == 0 or any(part_b[1:]):
+        print(name, "rank 0 alone should hold the gathered graph:", part_b); ok = False
+sys.exit(0 if ok else 1)
+PYEOF
+echo "solve_bfs: ok"
