@@ -435,6 +435,11 @@ int main(int argc, char** argv) {
   MPI_Comm comm = MPI_COMM_WORLD;
   snl::h5_quiet();
   const bool root = snl::comm_rank(comm) == 0;
+  if (const char* why = snl::allocator_choice_error()) {
+    if (root) std::fprintf(stderr, "snl: error: %s, not '%s'\n", why, std::getenv("SNL_MALLOC"));
+    MPI_Finalize();
+    return snl::kExitUsage;
+  }
 
   CLI::App app{"snl: cooperative sensor network localization from noisy ranges (MPI-parallel)"};
   app.require_subcommand(1);

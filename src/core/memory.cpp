@@ -54,6 +54,12 @@ void tune_allocator(char** argv) {
 #endif
 }
 
+const char* allocator_choice_error() {
+  const char* opt = std::getenv("SNL_MALLOC");
+  if (!opt || !*opt || std::strcmp(opt, "system") == 0 || std::strcmp(opt, "hugetlb") == 0) return nullptr;
+  return "SNL_MALLOC must be 'hugetlb' (the default) or 'system'";
+}
+
 const char* allocator_mode() {
 #if defined(SNL_GLIBC_MALLOC)
   const bool on = started_with_hugetlb < 0 ? hugetlb_on(std::getenv("GLIBC_TUNABLES")) : started_with_hugetlb == 1;

@@ -15,6 +15,10 @@ namespace snl {
 /// re-execution happened (not glibc, already tuned, opted out, exec failed).
 void tune_allocator(char** argv);
 
+/// Why SNL_MALLOC cannot be honoured (a value other than unset, empty,
+/// "hugetlb" or "system"), or nullptr when it can. snl refuses to start then.
+const char* allocator_choice_error();
+
 /// Whether this process runs with glibc.malloc.hugetlb set ("hugetlb") or not
 /// ("system"); for the solve's JSON.
 const char* allocator_mode();
