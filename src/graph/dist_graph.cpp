@@ -11,6 +11,17 @@
 
 namespace snl {
 
+void pack_offsets(std::vector<std::int64_t>& start, std::vector<int>& scount, int width, const char* what) {
+  const int size = static_cast<int>(start.size()) - 1;
+  scount.assign(static_cast<std::size_t>(size), 0);
+  for (int r = 0; r < size; ++r) {
+    if (start[r + 1] > INT32_MAX / std::max(width, 1))
+      throw Error(std::string(what) + ": more than 2^31 items for one rank in one message; use more ranks");
+    scount[r] = static_cast<int>(start[r + 1]);
+    start[r + 1] += start[r];
+  }
+}
+
 LocalOrdering default_local_ordering() {
   const char* e = std::getenv("SNL_LOCAL_ORDER");
   return (e && std::strcmp(e, "gid") == 0) ? LocalOrdering::kGlobalId : LocalOrdering::kRcm;
@@ -219,13 +230,9 @@ void send_records(MPI_Comm comm, std::vector<Rec>&& recs, std::vector<double>&& 
     to[k] = dest(k);
     ++start[to[k] + 1];
   }
-  std::vector<int> scount(size), vcount(size);
-  for (int r = 0; r < size; ++r) {
-    if (start[r + 1] > INT32_MAX / std::max(width, 1)) throw Error("edge exchange: message too large");
-    scount[r] = static_cast<int>(start[r + 1]);
-    vcount[r] = scount[r] * width;
-    start[r + 1] += start[r];
-  }
+  std::vector<int> scount, vcount(size);
+  pack_offsets(start, scount, width, "edge exchange");
+  for (int r = 0; r < size; ++r) vcount[r] = scount[r] * width;
   std::vector<Rec> sbuf(recs.size());
   std::vector<double> svals(vals.size());
   for (std::size_t k = 0; k < recs.size(); ++k) {

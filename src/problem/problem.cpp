@@ -99,12 +99,8 @@ Measurements merge_measurements(MPI_Comm comm, const Network& slab, ProblemRepor
     };
     std::vector<std::int64_t> start(static_cast<std::size_t>(size) + 1, 0);
     for (GlobalId e = 0; e < ne; ++e) ++start[dest(e) + 1];
-    std::vector<int> scount(size);
-    for (int r = 0; r < size; ++r) {
-      if (start[r + 1] > INT32_MAX) throw Error("merge: more than 2^31 measurements for one rank");
-      scount[r] = static_cast<int>(start[r + 1]);
-      start[r + 1] += start[r];
-    }
+    std::vector<int> scount;
+    pack_offsets(start, scount, 1, "merge");
     std::vector<SensorEdgeRec> sbuf(static_cast<std::size_t>(ne));
     for (GlobalId e = 0; e < ne; ++e) {
       GlobalId a = slab.sensor_edges[2 * e], b = slab.sensor_edges[2 * e + 1];

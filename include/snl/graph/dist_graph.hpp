@@ -112,9 +112,13 @@ OwnerDirectory partition_nodes(MPI_Comm comm, GlobalId n, const std::vector<Glob
 std::vector<int> partition_graph(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges,
                                  PartitionMethod method, PartitionStats* stats);
 
-/// Collective all-to-all of trivially copyable records: out[r] goes to rank r;
-/// returns what this rank received, concatenated in rank order.
-/// With `recv_counts`, how many came from each rank.
+/// For a send buffer packed in rank order: `start` holds each rank's record
+/// count at start[r + 1] (start[0] = 0, size + 1 entries) and becomes the
+/// ranks' first places (a running sum); scount gets the counts. Refuses a
+/// count whose `width` items per record exceed MPI's int (`what` names the
+/// exchange in the error).
+void pack_offsets(std::vector<std::int64_t>& start, std::vector<int>& scount, int width, const char* what);
+
 /// Collective: an MPI_Alltoallv of a send buffer already in rank order
 /// (scount[r] items for rank r) of trivially copyable items, which it
 /// consumes; returns what this rank received, in rank order. On one rank the
@@ -122,6 +126,9 @@ std::vector<int> partition_graph(MPI_Comm comm, GlobalId n, const std::vector<Gl
 template <class T>
 std::vector<T> exchange_packed(MPI_Comm comm, std::vector<T>&& sbuf, const std::vector<int>& scount);
 
+/// Collective all-to-all of trivially copyable records: out[r] goes to rank r;
+/// returns what this rank received, concatenated in rank order.
+/// With `recv_counts`, how many came from each rank.
 template <class T>
 std::vector<T> exchange_records(MPI_Comm comm, const std::vector<std::vector<T>>& out,
                                 std::vector<int>* recv_counts = nullptr);
