@@ -72,5 +72,24 @@ run_watched() {  # run_watched cmd...: runs cmd (stdin kept); a hang fails the t
     fail "hang: $*"
   done
 }
+# wait_caught SIG PID...: waits (up to 60 s) until every PID catches SIG (its
+# handler installed: SigCgt in /proc/PID/status), so that a signal sent next is
+# handled, not fatal: a rank that is still starting (MPI_Init, the allocator's
+# restart) under a loaded ctest -j would die of it. Status 1 on time-out.
+wait_caught() {
+  local num mask p ok
+  num=$(kill -l "$1")
+  shift
+  for _ in $(seq 1200); do
+    ok=1
+    for p in "$@"; do
+      mask=$(awk '/^SigCgt:/ {print $2}' "/proc/$p/status" 2> /dev/null || true)
+      if [ -z "$mask" ] || (( ((16#${mask: -8}) >> (num - 1) & 1) == 0 )); then ok=0; break; fi
+    done
+    [ "$ok" -eq 1 ] && return 0
+    sleep 0.05
+  done
+  return 1
+}
 mpi() { local np=$1; shift; run_watched "$MPIEXEC" "$MPIEXEC_NUMPROC_FLAG" "$np" --oversubscribe "$@"; }
 

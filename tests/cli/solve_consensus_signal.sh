@@ -11,8 +11,8 @@ same() {  # x and every history column identical
   h5diff "$1" "$2" /history > /dev/null || fail "$3: history differs"
 }
 # Seconds per primal iteration (SNL_TEST_CONSENSUS_DELAY): Newton converges in
-# 5 iterations, so it gets longer ones; the signal lands 0.7 s after the ranks
-# start, well inside every run.
+# 5 iterations, so it gets longer ones; the signal lands 0.3 s after every rank
+# has its handler installed, well inside every run.
 for case in "0.5 newton-tree --dual splitting" "0.2 subgradient --max-iter 40" "0.2 incremental --max-iter 40"; do
   read -r delay m <<< "$case"
   read -r -a ARGS <<< "--method $m -q"
@@ -29,7 +29,9 @@ for case in "0.5 newton-tree --dual splitting" "0.2 subgradient --max-iter 40" "
       [ "$(echo "$ranks" | wc -w)" -eq 3 ] && break
       sleep 0.05
     done
-    sleep 0.7
+    # shellcheck disable=SC2086  # ranks: a list of pids
+    wait_caught "$sig" $ranks || fail "$m: the ranks did not install their SIG$sig handler"
+    sleep 0.3
     ranks=$(ps -o pid=,comm= -g "$pid" | awk '$2 == "snl" {print $1}')
     [ -n "$ranks" ] || fail "$m: the run ended before the signal"
     kill -s "$sig" $ranks
