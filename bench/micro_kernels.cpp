@@ -186,6 +186,7 @@ BENCHMARK_TEMPLATE(BM_Iteration, kMM)->Arg(1)->Arg(0)->Iterations(30)->Unit(benc
 BENCHMARK_TEMPLATE(BM_Iteration, kMMAccel)->Arg(1)->Arg(0)->Iterations(30)->Unit(benchmark::kMillisecond);
 BENCHMARK_TEMPLATE(BM_IterationAfter, kRelax)->Arg(100)->Arg(300)->Arg(1000)->Iterations(30)->Unit(benchmark::kMillisecond);
 BENCHMARK_TEMPLATE(BM_IterationAfter, kMM)->Arg(300)->Iterations(30)->Unit(benchmark::kMillisecond);
+BENCHMARK_TEMPLATE(BM_IterationAfter, kMMAccel)->Arg(300)->Iterations(30)->Unit(benchmark::kMillisecond);
 BENCHMARK_TEMPLATE(BM_Pass, kRelax)->Arg(1)->Arg(4)->Arg(8)->Iterations(10)->Unit(benchmark::kMillisecond);
 BENCHMARK_TEMPLATE(BM_Pass, kMM)->Arg(1)->Arg(4)->Arg(8)->Iterations(10)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_HaloExchange)->Arg(1)->Iterations(2000)->Unit(benchmark::kMicrosecond);

@@ -209,58 +209,41 @@ SNL_AVX2 void mm_chunks_avx2(const LocalizationProblem& prob, const NodeLanes& n
   _mm_sfence();
 }
 
-// mm_cost_chunk on a full chunk, register lanes [h, h + 4) at a time (4 or 8
-// lanes): the scalar twin's arithmetic per lane (s and z2 from +0.0, then
-// sqrt, sub, mul, add), with the lanes whose slot is not forward adding +0.0
-// (and-masked), which changes no sum that starts at +0.0.
+// mm_cost_chunk on a full chunk of 4 lanes: the scalar twin's arithmetic per
+// lane (s and z2 from +0.0, then sqrt, sub, mul, add), with the lanes whose
+// slot is not forward adding +0.0 (and-masked), which changes no sum that
+// starts at +0.0. The MM kernel's row loads: the same lane order (0, 2, 1, 3).
 template <int P>
 SNL_AVX2 unsigned mm_cost_chunk_avx2_p(const NodeLanes& nl, std::int64_t c, const double* x, const double* y,
                                        double* F, double* f) {
-  const int C = nl.lanes;
   const __m256i bits = _mm256_set_epi64x(8, 4, 2, 1);
   unsigned any = 0;
-  for (int h = 0; h < C; h += 4) {
-    int q[4];
-    for (int l = 0; l < 4; ++l) q[l] = NodeLanes::lane_node(h + l, C);
-    __m256d XV[P];
-    if (C == 4) {  // the MM kernel's row loads: the same lane order (0, 2, 1, 3), fewer instructions
-      load_own<P>(x + std::size_t(nl.first[c]) * P, XV);
-    } else {
-      for (int k = 0; k < P; ++k) {
-        auto own = [&](int l) { return x[std::size_t(nl.first[c] + q[l]) * P + k]; };
-        XV[k] = _mm256_set_pd(own(3), own(2), own(1), own(0));
-      }
+  __m256d XV[P];
+  load_own<P>(x + std::size_t(nl.first[c]) * P, XV);
+  __m256d SF = _mm256_setzero_pd(), Sf = _mm256_setzero_pd();
+  const std::int64_t last = nl.groups() - 1;
+  for (std::int64_t g = nl.group_off[c]; g < nl.group_off[c + 1]; ++g) {
+    prefetch_group<4, P>(nl, g, last, y);  // as the MM kernel (the chunks are visited in order)
+    prefetch_rows<4, P>(nl, g, last, x);
+    const unsigned mask = (nl.real[g] & nl.fwd[g]) & 15u;
+    if (!mask) continue;
+    any |= mask;
+    const __m256d M =
+        _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_and_si256(_mm256_set1_epi64x(mask), bits), bits));
+    __m256d S = _mm256_setzero_pd(), Z2 = _mm256_setzero_pd(), U[P];
+    load_rows<P>(x, &nl.adj[g * 4], U);
+    for (int k = 0; k < P; ++k) {
+      const __m256d Z = _mm256_sub_pd(XV[k], U[k]);
+      const __m256d R = _mm256_sub_pd(Z, _mm256_loadu_pd(y + std::size_t(g * P + k) * 4));
+      S = _mm256_add_pd(S, _mm256_mul_pd(R, R));
+      Z2 = _mm256_add_pd(Z2, _mm256_mul_pd(Z, Z));
     }
-    __m256d SF = _mm256_setzero_pd(), Sf = _mm256_setzero_pd();
-    for (std::int64_t g = nl.group_off[c]; g < nl.group_off[c + 1]; ++g) {
-      const unsigned mask = ((nl.real[g] & nl.fwd[g]) >> h) & 15u;
-      if (!mask) continue;
-      any |= mask << h;
-      const __m256d M = _mm256_castsi256_pd(
-          _mm256_cmpeq_epi64(_mm256_and_si256(_mm256_set1_epi64x(mask), bits), bits));
-      const LocalId* a = &nl.adj[g * C];
-      __m256d S = _mm256_setzero_pd(), Z2 = _mm256_setzero_pd(), U[P];
-      if (C == 4) {
-        load_rows<P>(x, a, U);
-      } else {
-        for (int k = 0; k < P; ++k) {
-          auto nbr = [&](int l) { return x[std::size_t(a[q[l]]) * P + k]; };
-          U[k] = _mm256_set_pd(nbr(3), nbr(2), nbr(1), nbr(0));
-        }
-      }
-      for (int k = 0; k < P; ++k) {
-        const __m256d Z = _mm256_sub_pd(XV[k], U[k]);
-        const __m256d R = _mm256_sub_pd(Z, _mm256_loadu_pd(y + std::size_t(g * P + k) * C + h));
-        S = _mm256_add_pd(S, _mm256_mul_pd(R, R));
-        Z2 = _mm256_add_pd(Z2, _mm256_mul_pd(Z, Z));
-      }
-      const __m256d Mf = _mm256_sub_pd(_mm256_sqrt_pd(Z2), _mm256_loadu_pd(&nl.rho[g * C + h]));
-      SF = _mm256_add_pd(SF, _mm256_and_pd(S, M));
-      Sf = _mm256_add_pd(Sf, _mm256_and_pd(_mm256_mul_pd(Mf, Mf), M));
-    }
-    _mm256_storeu_pd(F + h, _mm256_add_pd(_mm256_loadu_pd(F + h), SF));
-    _mm256_storeu_pd(f + h, _mm256_add_pd(_mm256_loadu_pd(f + h), Sf));
+    const __m256d Mf = _mm256_sub_pd(_mm256_sqrt_pd(Z2), _mm256_loadu_pd(&nl.rho[g * 4]));
+    SF = _mm256_add_pd(SF, _mm256_and_pd(S, M));
+    Sf = _mm256_add_pd(Sf, _mm256_and_pd(_mm256_mul_pd(Mf, Mf), M));
   }
+  _mm256_storeu_pd(F, _mm256_add_pd(_mm256_loadu_pd(F), SF));
+  _mm256_storeu_pd(f, _mm256_add_pd(_mm256_loadu_pd(f), Sf));
   return any;
 }
 

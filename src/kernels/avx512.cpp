@@ -145,11 +145,13 @@ SNL_AVX512 void relax_chunks_avx512(const LocalizationProblem& prob, const NodeL
   _mm_sfence();  // order the non-temporal stores before what follows
 }
 
-template <int P>
+// Extrap: mm-accel's extrapolated edge variables ya + beta (ya - yb), formed
+// on the fly, the result stored to y (as mm_chunks_avx2).
+template <int P, bool Extrap = false>
 SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0,
                                  std::int64_t c1, const MMStep& s) {
   const __m512d minus_one = _mm512_set1_pd(-1.0), zero = _mm512_setzero_pd();
-  const __m512d vkeep = _mm512_set1_pd(s.keep), vinvL = _mm512_set1_pd(s.invL);
+  const __m512d vkeep = _mm512_set1_pd(s.keep), vinvL = _mm512_set1_pd(s.invL), vbeta = _mm512_set1_pd(s.beta);
   __m512d DD = load_lanes8(s.norms), SS = load_lanes8(s.norms + 8);
   const std::int64_t last = nl.groups() - 1;
   for (std::int64_t c = c0; c < c1; ++c) {
@@ -159,7 +161,12 @@ SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& prob, const NodeLane
     load_own8<P>(s.x + i0, V);
     for (int k = 0; k < P; ++k) A[k] = _mm512_setzero_pd();
     for (std::int64_t g = nl.group_off[c]; g < nl.group_off[c + 1]; ++g) {
-      prefetch_group<8, P>(nl, g, last, s.y);
+      if constexpr (Extrap) {
+        prefetch_group<8, P>(nl, g, last, s.ya);
+        prefetch_group<8, P>(nl, g, last, s.yb);
+      } else {
+        prefetch_group<8, P>(nl, g, last, s.y);
+      }
       prefetch_rows<8, P>(nl, g, last, s.x);
       __m512d U[P], dz[P], yn[P];
       load_rows8<P>(s.x, nl.adj.data() + 8 * g, U);
@@ -168,7 +175,13 @@ SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& prob, const NodeLane
       double* yg = s.y + 8 * P * g;
       for (int k = 0; k < P; ++k) {
         dz[k] = _mm512_mask_sub_pd(_mm512_sub_pd(U[k], V[k]), fw, V[k], U[k]);
-        const __m512d Y = _mm512_loadu_pd(yg + 8 * k);
+        __m512d Y;
+        if constexpr (Extrap) {  // a + beta (a - b), as the blend pass
+          const __m512d Ya = _mm512_loadu_pd(s.ya + 8 * P * g + 8 * k);
+          Y = _mm512_add_pd(Ya, _mm512_mul_pd(vbeta, _mm512_sub_pd(Ya, _mm512_loadu_pd(s.yb + 8 * P * g + 8 * k))));
+        } else {
+          Y = _mm512_loadu_pd(yg + 8 * k);
+        }
         __m512d t = _mm512_sub_pd(dz[k], Y);
         t = _mm512_mask_mul_pd(t, bw, t, minus_one);  // sgn (dz - y): 1.0 * t is t
         A[k] = _mm512_mask_add_pd(A[k], re, A[k], t);
@@ -201,11 +214,50 @@ SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& prob, const NodeLane
   _mm_sfence();
 }
 
+// mm_cost_chunk_avx2_p with 8 lanes: the MM kernel's row loads (lane order
+// (0, 4, 1, 5, ...), the layout's), the scalar twin's arithmetic per lane,
+// and the lanes whose slot is not forward adding +0.0 (zero-masked).
+template <int P>
+SNL_AVX512 unsigned mm_cost_chunk_avx512_p(const NodeLanes& nl, std::int64_t c, const double* x, const double* y,
+                                           double* F, double* f) {
+  unsigned any = 0;
+  __m512d XV[P];
+  load_own8<P>(x + std::size_t(nl.first[c]) * P, XV);
+  __m512d SF = _mm512_setzero_pd(), Sf = _mm512_setzero_pd();
+  const std::int64_t last = nl.groups() - 1;
+  for (std::int64_t g = nl.group_off[c]; g < nl.group_off[c + 1]; ++g) {
+    prefetch_group<8, P>(nl, g, last, y);  // as the MM kernel (the chunks are visited in order)
+    prefetch_rows<8, P>(nl, g, last, x);
+    const __mmask8 M = static_cast<__mmask8>(nl.real[g] & nl.fwd[g]);
+    if (!M) continue;
+    any |= M;
+    __m512d S = _mm512_setzero_pd(), Z2 = _mm512_setzero_pd(), U[P];
+    load_rows8<P>(x, &nl.adj[g * 8], U);
+    for (int k = 0; k < P; ++k) {
+      const __m512d Z = _mm512_sub_pd(XV[k], U[k]);
+      const __m512d R = _mm512_sub_pd(Z, _mm512_loadu_pd(y + std::size_t(g * P + k) * 8));
+      S = _mm512_add_pd(S, _mm512_mul_pd(R, R));
+      Z2 = _mm512_add_pd(Z2, _mm512_mul_pd(Z, Z));
+    }
+    const __m512d Mf = _mm512_sub_pd(_mm512_sqrt_pd(Z2), _mm512_loadu_pd(&nl.rho[g * 8]));
+    SF = _mm512_add_pd(SF, _mm512_maskz_mov_pd(M, S));
+    Sf = _mm512_add_pd(Sf, _mm512_maskz_mov_pd(M, _mm512_mul_pd(Mf, Mf)));
+  }
+  _mm512_storeu_pd(F, _mm512_add_pd(_mm512_loadu_pd(F), SF));
+  _mm512_storeu_pd(f, _mm512_add_pd(_mm512_loadu_pd(f), Sf));
+  return any;
+}
+
 }  // namespace
+
+unsigned mm_cost_chunk_avx512(const NodeLanes& nl, int p, std::int64_t c, const double* x, const double* y,
+                              double* F, double* f) {
+  return p == 2 ? mm_cost_chunk_avx512_p<2>(nl, c, x, y, F, f) : mm_cost_chunk_avx512_p<3>(nl, c, x, y, F, f);
+}
 
 const KernelTable kAvx512Kernels = {{relax_chunks_avx512<2>, relax_chunks_avx512<3>},
                                     {mm_chunks_avx512<2>, mm_chunks_avx512<3>},
-                                    {nullptr, nullptr}};  // mm-accel blends y in its own pass here
+                                    {mm_chunks_avx512<2, true>, mm_chunks_avx512<3, true>}};
 #pragma GCC diagnostic pop
 
 }  // namespace snl::detail

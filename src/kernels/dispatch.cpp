@@ -98,23 +98,19 @@ void relax_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int
 
 void mm_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
                const MMStep& s) {
-  if (s.ya) {
-    if (!mm_chunks_extrapolate(nl)) throw Error("mm_chunks: no extrapolating kernel for this layout");
+  if (s.ya)
     run_chunks<&KernelTable::mm_extrapolated>(prob, nl, c0, c1, s);
-  } else {
+  else
     run_chunks<&KernelTable::mm>(prob, nl, c0, c1, s);
-  }
-}
-
-bool mm_chunks_extrapolate(const NodeLanes& nl) {
-  const KernelTable* simd = simd_table(nl.lanes);
-  return !simd || simd->mm_extrapolated[0];
 }
 
 unsigned mm_cost_chunk(const NodeLanes& nl, int p, std::int64_t c, const double* x, const double* y, double* F,
                        double* f) {
 #ifdef SNL_HAVE_AVX2_PATH
-  if (g_level > 0 && p >= 2 && nl.count[c] == nl.lanes) return mm_cost_chunk_avx2(nl, p, c, x, y, F, f);
+  if (p >= 2 && nl.count[c] == nl.lanes) {
+    if (g_level == 2 && nl.lanes == 8) return mm_cost_chunk_avx512(nl, p, c, x, y, F, f);
+    if (g_level >= 1 && nl.lanes == 4) return mm_cost_chunk_avx2(nl, p, c, x, y, F, f);
+  }
 #endif
   return mm_cost_chunk_scalar(nl, p, c, x, y, F, f);
 }

@@ -214,16 +214,13 @@ struct MMStep {
   /// mm-accel's extrapolated edge variables, read on the fly: where ya is
   /// set, each real slot's y_e is taken as ya + beta (ya - yb) (the same
   /// arithmetic as a separate blend pass, so the same bits) and the step's
-  /// result is written to y. Only where mm_chunks_extrapolate() says so.
+  /// result is written to y. Every kernel table (scalar, AVX2, AVX-512) has it.
   const double* ya = nullptr;
   const double* yb = nullptr;
   double beta = 0;
 };
 void mm_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
                const MMStep& s);
-/// Whether mm_chunks honours MMStep::ya on this layout with the kernels in
-/// use (the scalar and AVX2 kernels do; the AVX-512 ones do not).
-bool mm_chunks_extrapolate(const NodeLanes& nl);
 
 /// mm-accel's acceptance costs (src/solvers/mm_accel.cpp) on chunk c: per
 /// register lane L, the sums over its node's forward slots (MM's
@@ -231,9 +228,9 @@ bool mm_chunks_extrapolate(const NodeLanes& nl);
 /// order, of |x_v - x_u - y_e|^2 into F[L] and of (|x_v - x_u| - rho_e)^2
 /// into f[L]: the edge terms of 000's surrogate (eq. 2) and of the ML cost,
 /// before their factor 1/2. F and f hold C zeros on entry. Returns the lanes
-/// with at least one forward slot. A full chunk (p = 2, 3) takes the AVX2
-/// path where simd_enabled(), for 4 and 8 lanes alike; every lane equals the
-/// scalar twin bit for bit.
+/// with at least one forward slot. A full chunk (p = 2, 3) takes the SIMD
+/// path of its layout where simd_enabled() (AVX2 for 4 lanes, AVX-512 for
+/// 8); every lane equals the scalar twin bit for bit.
 unsigned mm_cost_chunk(const NodeLanes& nl, int p, std::int64_t c, const double* x, const double* y, double* F,
                        double* f);
 

@@ -27,7 +27,7 @@ using MMChunksFn = void (*)(const LocalizationProblem&, const NodeLanes&, std::i
 struct KernelTable {
   RelaxChunksFn relax[2];
   MMChunksFn mm[2];
-  MMChunksFn mm_extrapolated[2];  ///< MMStep::ya set; null where the table has none
+  MMChunksFn mm_extrapolated[2];  ///< MMStep::ya set
 };
 
 extern const KernelTable kScalarKernels;  // scalar.cpp
@@ -35,12 +35,15 @@ extern const KernelTable kScalarKernels;  // scalar.cpp
 /// small; the lane layout is the same, so ranks still agree bit for bit).
 extern const RelaxChunksFn kScalarRelax1;  // scalar.cpp
 extern const MMChunksFn kScalarMM1;        // scalar.cpp
-/// mm_cost_chunk's twins: scalar (any p, any chunk; scalar.cpp) and AVX2
-/// (p = 2, 3, full chunks of 4 or 8 lanes, 4 at a time; avx2.cpp).
+/// mm_cost_chunk's twins: scalar (any p, any chunk; scalar.cpp), AVX2 (p =
+/// 2, 3, full chunks of 4 lanes; avx2.cpp) and AVX-512 (p = 2, 3, full chunks
+/// of 8 lanes; avx512.cpp).
 unsigned mm_cost_chunk_scalar(const NodeLanes& nl, int p, std::int64_t c, const double* x, const double* y,
                               double* F, double* f);
 unsigned mm_cost_chunk_avx2(const NodeLanes& nl, int p, std::int64_t c, const double* x, const double* y,
                             double* F, double* f);
+unsigned mm_cost_chunk_avx512(const NodeLanes& nl, int p, std::int64_t c, const double* x, const double* y,
+                              double* F, double* f);
 
 #ifdef SNL_HAVE_AVX2_PATH
 extern const KernelTable kAvx2Kernels;    // avx2.cpp, 4 lanes

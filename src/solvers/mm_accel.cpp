@@ -74,9 +74,9 @@ class LaneCore {
   void init(const double* x, double* y, double* w) const {
     detail::with_dim(prob_.dim(), [&](auto P) { init_p<decltype(P)::value>(x, y, w); });
   }
-  // Whether step() forms the extrapolated edge variables itself (the kernels
-  // in use read ya + beta (ya - yb) on the fly: one pass over y fewer).
-  bool extrapolates_y() const { return detail::mm_chunks_extrapolate(lanes_); }
+  // step() forms the extrapolated edge variables itself (every kernel table
+  // reads ya + beta (ya - yb) on the fly: one pass over y fewer).
+  bool extrapolates_y() const { return true; }
   // One MM step from v (ghost rows included) into xout; w in place; y in
   // place, or, with ya given, from ya + beta (ya - yb) into y.
   void step(const double* v, double* xout, double* y, double* w, const double* ya = nullptr,
@@ -279,7 +279,6 @@ class MMAccel final : public Algorithm {
   // reduction, no halo message).
   void restart() {
     t_ = 0;
-    ++restarts_;
     init_for_dim();
     detail::ExactSum sums[2];
     core_.add_terms(x_[kCur].data(), y_[kCur].data(), w_[kCur].data(), 0, core_.chunks(), sums);
@@ -335,7 +334,6 @@ class MMAccel final : public Algorithm {
   std::array<std::vector<double>, 4> x_;  // z(k), z(k-1), the step's output, the extrapolated rows
   std::array<std::vector<double>, 3> y_, w_;  // z(k), z(k-1), the step's (in place); y_ in lane layout
   std::int64_t t_ = 0;         // steps accepted since the last restart
-  std::int64_t restarts_ = 0;
   double F_ = 0;               // F(z(k))
   double f_ = 0;               // f(x(k))
 };

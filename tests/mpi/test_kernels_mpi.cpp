@@ -248,7 +248,7 @@ TEST_P(KernelsByDim, SimdMMStepEqualsScalarBitForBit) {
 
 // mm-accel's extrapolating step (MMStep::ya): forming ya + beta (ya - yb) in
 // the kernel gives the bits of a separate blend pass followed by the in-place
-// step, on the scalar and (where the layout has one: AVX2) the SIMD path, every
+// step, on the scalar and the SIMD path (AVX2 or AVX-512, the layout's), every
 // real slot, x(t+1), the anchor variables and the norms; ya and yb are not
 // written.
 TEST_P(KernelsByDim, ExtrapolatingMMStepEqualsBlendThenStep) {
@@ -265,11 +265,6 @@ TEST_P(KernelsByDim, ExtrapolatingMMStepEqualsBlendThenStep) {
   for (bool simd : {false, true}) {
     if (simd && !have_simd()) continue;
     const bool had = detail::set_simd_enabled(simd);
-    if (!detail::mm_chunks_extrapolate(nl)) {  // the AVX-512 layout: mm-accel blends y in its own pass
-      detail::set_simd_enabled(had);
-      ASSERT_TRUE(simd) << "the scalar kernels always extrapolate";
-      continue;
-    }
     auto step = [&](bool fused, std::vector<double>* y, std::vector<double>* aw, std::vector<double>* xn,
                     std::vector<double>* norms) {
       y->assign(ycur.size(), -3.0);
@@ -310,7 +305,8 @@ TEST_P(KernelsByDim, ExtrapolatingMMStepEqualsBlendThenStep) {
 
 // mm-accel's acceptance costs per chunk: each lane holds its node's sums over
 // its forward slots in slot order (checked against a plain loop over the CSR),
-// and the AVX2 path gives the scalar twin's bits, the awkward rows included.
+// and the SIMD path of the layout (AVX2 or AVX-512) gives the scalar twin's
+// bits, the awkward rows included.
 TEST_P(KernelsByDim, MMCostChunkSumsEachNodesForwardSlotsInOrder) {
   std::mt19937_64 gen(13);
   std::uniform_real_distribution<double> u(-1, 1);
