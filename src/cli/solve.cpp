@@ -148,7 +148,7 @@ LoadedProblem load_problem(const SolveCommand& cmd, PartitionMethod pm, bool tal
   if (slab.num_anchors() == 0) throw Error(cmd.network + ": the network has no anchors; positions are not determined");
   lp.t_read = MPI_Wtime();
   lp.fingerprint = network_fingerprint(slab, comm);
-  collective_try(comm, [&] { lp.prob = std::make_unique<LocalizationProblem>(comm, slab, pm, &lp.rep); });
+  collective_try(comm, [&] { lp.prob = std::make_unique<LocalizationProblem>(comm, std::move(slab), pm, &lp.rep); });
   slab = Network();  // the problem holds what it needs
   lp.t_setup = MPI_Wtime();
   if (talk) print_problem_report(*lp.prob, lp.rep, comm);

@@ -240,9 +240,9 @@ void send_records(MPI_Comm comm, std::vector<Rec>&& recs, std::vector<double>&& 
     sbuf[pos] = recs[k];
     std::copy(vals.begin() + k * width, vals.begin() + (k + 1) * width, svals.begin() + pos * width);
   }
-  recs = {};
-  vals = {};
-  to = {};
+  release(recs);
+  release(vals);
+  release(to);
   got = exchange_packed(comm, std::move(sbuf), scount);
   got_vals = exchange_packed(comm, std::move(svals), vcount);
 }
@@ -259,8 +259,9 @@ struct HalfTagged {
 // problem's merged measurements are; that end is then a), which tags a's
 // owner; to the block holder of b, which tags b's and counts the cut; to the
 // owners. Edges are undirected: a and b may swap. Returns the local edge cut.
-GlobalId route_edges(MPI_Comm comm, const OwnerDirectory& dir, const std::vector<GlobalId>& edges,
-                     const std::vector<double>& edge_values, int width, std::vector<EdgeRec>& mine,
+// Consumes edges and edge_values (freed once the first records are built).
+GlobalId route_edges(MPI_Comm comm, const OwnerDirectory& dir, std::vector<GlobalId>&& edges,
+                     std::vector<double>&& edge_values, int width, std::vector<EdgeRec>& mine,
                      std::vector<double>& mine_vals) {
   const int size = comm_size(comm);
   const GlobalId n = dir.num_global();
@@ -272,11 +273,12 @@ GlobalId route_edges(MPI_Comm comm, const OwnerDirectory& dir, const std::vector
     for (std::size_t k = 0; k < edges.size() && local; k += 2) local = in_block(edges[k]) || in_block(edges[k + 1]);
     MPI_Allreduce(&local, &all, 1, MPI_INT, MPI_MIN, comm);
     std::vector<HalfTagged> pairs(edges.size() / 2);
-    std::vector<double> pair_vals(edge_values);
+    std::vector<double> pair_vals = std::move(edge_values);
     for (std::size_t e = 0; e < pairs.size(); ++e) {
       const bool swap = all && !in_block(edges[2 * e]);
       pairs[e] = {edges[2 * e + (swap ? 1 : 0)], edges[2 * e + (swap ? 0 : 1)], -1, -1};
     }
+    release(edges);
     if (all) {
       half = std::move(pairs);
       half_vals = std::move(pair_vals);
@@ -318,7 +320,7 @@ GlobalId route_edges(MPI_Comm comm, const OwnerDirectory& dir, const std::vector
       ++d;
     }
   }
-  at_b = {};
+  release(at_b);
   send_records(comm, std::move(full), std::move(at_b_vals), width,
                [&](std::size_t k) { return k < n_first ? full[k].oa : full[k].ob; }, mine, mine_vals);
   return cut;
@@ -423,8 +425,8 @@ OwnedLists neighbour_lists(const OwnerDirectory& dir, int rank, std::vector<Edge
   L.peak_bytes = static_cast<std::int64_t>(mine.capacity() * sizeof(EdgeRec) + mine_vals.capacity() * sizeof(double) +
                                            L.entries.capacity() * sizeof(Entry) + key.capacity() * 4 +
                                            L.vals.capacity() * sizeof(double) + bstart.capacity() * 16);
-  mine = {};
-  mine_vals = {};
+  release(mine);
+  release(mine_vals);
   L.cnt.assign(static_cast<std::size_t>(n_owned) + 1, 0);
   L.boundary.assign(static_cast<std::size_t>(n_owned), 0);
   std::vector<Entry> b_ent;
@@ -607,19 +609,20 @@ HaloPlan make_halo(MPI_Comm comm, const std::vector<Ghost>& ghosts, const OwnedL
 
 }  // namespace
 
-DistGraph::DistGraph(MPI_Comm comm, GlobalId n, const std::vector<int>& owner, const std::vector<GlobalId>& edges,
-                     const std::vector<double>& edge_values, int width, int halo_width, LocalOrdering ordering)
-    : DistGraph(comm, OwnerDirectory::from_dense(comm, n, owner), edges, edge_values, width, halo_width, ordering) {}
+DistGraph::DistGraph(MPI_Comm comm, GlobalId n, const std::vector<int>& owner, std::vector<GlobalId> edges,
+                     std::vector<double> edge_values, int width, int halo_width, LocalOrdering ordering)
+    : DistGraph(comm, OwnerDirectory::from_dense(comm, n, owner), std::move(edges), std::move(edge_values), width,
+                halo_width, ordering) {}
 
-DistGraph::DistGraph(MPI_Comm comm, const OwnerDirectory& owners, const std::vector<GlobalId>& edges,
-                     const std::vector<double>& edge_values, int width, int halo_width, LocalOrdering ordering)
+DistGraph::DistGraph(MPI_Comm comm, const OwnerDirectory& owners, std::vector<GlobalId> edges,
+                     std::vector<double> edge_values, int width, int halo_width, LocalOrdering ordering)
     : comm_(comm), n_global_(owners.num_global()), width_(width) {
   const MPI_Comm gc = comm_.get();  // the graph's own duplicate (halo traffic apart from the caller's)
   const int rank = comm_rank(gc);
   PhaseClock clock(build_phases_);
   std::vector<EdgeRec> mine;
   std::vector<double> mine_vals;
-  long long cut = route_edges(gc, owners, edges, edge_values, width, mine, mine_vals), gcut = 0;
+  long long cut = route_edges(gc, owners, std::move(edges), std::move(edge_values), width, mine, mine_vals), gcut = 0;
   MPI_Allreduce(&cut, &gcut, 1, MPI_LONG_LONG, MPI_SUM, gc);
   edge_cut_ = gcut;
   clock.done("exchange");

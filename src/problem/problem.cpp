@@ -231,10 +231,17 @@ std::vector<GlobalId> flagged_sample(MPI_Comm comm, const DistGraph& graph, cons
 LocalizationProblem::LocalizationProblem(MPI_Comm comm, const Network& slab, PartitionMethod method,
                                          ProblemReport* report)
     : dim_(slab.dim), anchors_(slab.anchors), has_truth_(slab.has_truth), sigma_(slab.sigma) {
-  abort_on_local_failure(comm, "problem setup", [&] { build(comm, slab, method, report); });
+  abort_on_local_failure(comm, "problem setup", [&] { build(comm, slab, nullptr, method, report); });
 }
 
-void LocalizationProblem::build(MPI_Comm comm, const Network& slab, PartitionMethod method, ProblemReport* report) {
+LocalizationProblem::LocalizationProblem(MPI_Comm comm, Network&& slab, PartitionMethod method,
+                                         ProblemReport* report)
+    : dim_(slab.dim), anchors_(slab.anchors), has_truth_(slab.has_truth), sigma_(slab.sigma) {
+  abort_on_local_failure(comm, "problem setup", [&] { build(comm, slab, &slab, method, report); });
+}
+
+void LocalizationProblem::build(MPI_Comm comm, const Network& slab, Network* consumed, PartitionMethod method,
+                                ProblemReport* report) {
   test_fail_point("setup");  // fault-injection tests: one rank fails before the first collective
   // The setup's temporaries (GBs at 10M) reuse freed memory instead of faulting
   // fresh pages; returned to the system at the end (snl/core/memory.hpp).
@@ -243,6 +250,16 @@ void LocalizationProblem::build(MPI_Comm comm, const Network& slab, PartitionMet
   ProblemReport rep;
   SetupClock clock(rep.setup_phases);
   Measurements m = merge_measurements(comm, slab, rep);
+  if (consumed) {  // the merged lists hold them now; the truth and flags rows are still to come
+    release(consumed->sensor_edges);
+    release(consumed->sensor_ranges);
+    release(consumed->sensor_sigmas);
+    release(consumed->sensor_nlos);
+    release(consumed->anchor_edges);
+    release(consumed->anchor_ranges);
+    release(consumed->anchor_sigmas);
+    release(consumed->anchor_nlos);
+  }
   clock.done("merge");
   rep.setup_bytes.emplace_back(
       "measurements", static_cast<std::int64_t>((m.sedges.capacity() + m.aedges.capacity()) * sizeof(GlobalId) +
@@ -254,26 +271,25 @@ void LocalizationProblem::build(MPI_Comm comm, const Network& slab, PartitionMet
   for (const auto& ph : rep.partition.phases) rep.setup_phases.emplace_back("partition." + ph.first, ph.second);
   rep.setup_bytes.emplace_back("partition", rep.partition.peak_bytes);
   rep.setup_bytes.emplace_back("directory", owners.memory_bytes());
+  // The merged lists move into the graph build, which frees them once it has its own records.
   if (m.has_ssigmas) {  // sigmas ride along as a second column, then move to their own array
     std::vector<double> vals(2 * m.sranges.size());
     for (std::size_t e = 0; e < m.sranges.size(); ++e) {
       vals[2 * e] = m.sranges[e];
       vals[2 * e + 1] = m.ssigmas[e];
     }
-    graph_ = DistGraph(comm, owners, m.sedges, vals, 2, std::max(dim_, 2));
+    release(m.sranges);
+    release(m.ssigmas);
+    graph_ = DistGraph(comm, owners, std::move(m.sedges), std::move(vals), 2, std::max(dim_, 2));
     sensor_sigmas_ = graph_.take_last_edge_column();
     has_sensor_sigmas_ = true;
   } else {
-    graph_ = DistGraph(comm, owners, m.sedges, m.sranges, 1, std::max(dim_, 2));
+    graph_ = DistGraph(comm, owners, std::move(m.sedges), std::move(m.sranges), 1, std::max(dim_, 2));
   }
   clock.done("graph");
   for (const auto& ph : graph_.build_phases()) rep.setup_phases.emplace_back("graph." + ph.first, ph.second);
   rep.setup_bytes.emplace_back("graph_build", graph_.build_peak_bytes());
   rep.partition.edge_cut = graph_.edge_cut();
-  m.sedges.clear();
-  m.sedges.shrink_to_fit();
-  m.sranges.clear();
-  m.sranges.shrink_to_fit();
   count_ghosts(comm, graph_, rep.partition);
   has_anchor_sigmas_ = m.has_asigmas;
   distribute_anchors(comm, owners, m.aedges, m.aranges, m.asigmas);
@@ -354,7 +370,7 @@ std::vector<std::uint8_t> LocalizationProblem::unanchored_owned(MPI_Comm comm) {
     if (comp_of_root[r] < 0) comp_of_root[r] = ncomp++;
     comp[v] = static_cast<LocalId>(comp_of_root[r]);
   }
-  comp_of_root = {};
+  release(comp_of_root);
   ds = DisjointSets<LocalId>(0);
   std::vector<std::uint8_t> anchored(static_cast<std::size_t>(ncomp), 0), remote(static_cast<std::size_t>(ncomp), 0);
   for (LocalId v = 0; v < n_owned; ++v)
@@ -374,7 +390,7 @@ std::vector<std::uint8_t> LocalizationProblem::unanchored_owned(MPI_Comm comm) {
         msg.push_back(first + comp[v]);
         msg.push_back(static_cast<GlobalId>(label[adj[e]]));
       }
-  label = {};
+  release(label);
   const std::int64_t n_pairs = static_cast<std::int64_t>(msg.size() / 2);
   std::vector<GlobalId> mine_remote;
   for (std::int64_t c = 0; c < ncomp; ++c)

@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace snl {
 
@@ -24,5 +25,12 @@ class NumericalFailure : public Error {
  public:
   using Error::Error;
 };
+
+/// Frees v's storage now. (`v = {}` does not: it assigns an empty
+/// initializer list and keeps the capacity.)
+template <class T, class A>
+void release(std::vector<T, A>& v) {
+  std::vector<T, A>().swap(v);
+}
 
 }  // namespace snl

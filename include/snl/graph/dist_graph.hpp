@@ -151,12 +151,14 @@ class DistGraph {
   /// rank's share of the undirected edges (global pairs, each edge once
   /// overall, any rank may hold any edge), with `width` doubles of data each
   /// in `edge_values`. `halo_width`: most doubles per node the halo carries.
-  DistGraph(MPI_Comm comm, const OwnerDirectory& owners, const std::vector<GlobalId>& edges,
-            const std::vector<double>& edge_values, int width, int halo_width,
+  /// Both lists are taken by value: move them in (std::move) and their memory
+  /// is freed as soon as the build has its own copy of them.
+  DistGraph(MPI_Comm comm, const OwnerDirectory& owners, std::vector<GlobalId> edges,
+            std::vector<double> edge_values, int width, int halo_width,
             LocalOrdering ordering = default_local_ordering());
   /// The same from every node's owner rank (identical on every rank).
-  DistGraph(MPI_Comm comm, GlobalId n, const std::vector<int>& owner, const std::vector<GlobalId>& edges,
-            const std::vector<double>& edge_values, int width, int halo_width,
+  DistGraph(MPI_Comm comm, GlobalId n, const std::vector<int>& owner, std::vector<GlobalId> edges,
+            std::vector<double> edge_values, int width, int halo_width,
             LocalOrdering ordering = default_local_ordering());
 
   /// The graph's own duplicate of the constructor's communicator (congruent
@@ -248,7 +250,7 @@ std::vector<T> exchange_packed(MPI_Comm comm, std::vector<T>&& sbuf, const std::
   std::vector<T> rbuf(static_cast<std::size_t>(rtot));
   MPI_Alltoallv(sbuf.data(), scount.data(), sdisp.data(), rec, rbuf.data(), rcount.data(), rdisp.data(), rec, comm);
   MPI_Type_free(&rec);
-  sbuf = {};
+  release(sbuf);
   return rbuf;
 }
 
