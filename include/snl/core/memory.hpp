@@ -26,9 +26,10 @@ const char* allocator_mode();
 /// While alive, freed memory stays in the process for reuse instead of going
 /// back to the system (glibc: no mmap for large blocks, no trimming), so that
 /// the setup's temporaries fault their pages once; on destruction the defaults
-/// are restored and the free memory is returned (malloc_trim). Costs 11% of
-/// peak resident memory at 10M sensors on 2 ranks (fragmentation), nothing
-/// measurable on one rank (docs/performance.md). No effect without glibc or with SNL_MALLOC=system.
+/// are restored and the free memory is returned (malloc_trim). With the
+/// huge-page tunable it costs 24% of peak resident memory at 10M sensors on 2
+/// ranks (fragmentation) and cuts the setup 2.7-4 times (docs/performance.md,
+/// "Inputs freed as soon as they are copied"). No effect without glibc or with SNL_MALLOC=system.
 class ReuseFreedMemory {
  public:
   ReuseFreedMemory();
