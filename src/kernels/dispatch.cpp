@@ -107,10 +107,9 @@ void mm_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_
 unsigned mm_cost_chunk(const NodeLanes& nl, int p, std::int64_t c, const double* x, const double* y, double* F,
                        double* f) {
 #ifdef SNL_HAVE_AVX2_PATH
-  if (p >= 2 && nl.count[c] == nl.lanes) {
-    if (g_level == 2 && nl.lanes == 8) return mm_cost_chunk_avx512(nl, p, c, x, y, F, f);
-    if (g_level >= 1 && nl.lanes == 4) return mm_cost_chunk_avx2(nl, p, c, x, y, F, f);
-  }
+  // The SIMD form of the layout's table (simd_table's rule), on full chunks.
+  if (const KernelTable* simd = simd_table(nl.lanes); simd && p >= 2 && nl.count[c] == nl.lanes)
+    return (simd == &kAvx512Kernels ? mm_cost_chunk_avx512 : mm_cost_chunk_avx2)(nl, p, c, x, y, F, f);
 #endif
   return mm_cost_chunk_scalar(nl, p, c, x, y, F, f);
 }
