@@ -7,6 +7,7 @@
 #include <limits>
 #include <numeric>
 
+#include "graph/partition_detail.hpp"
 #include "snl/core/mpi_util.hpp"
 #include "snl/graph/dist_graph.hpp"
 #include "snl/io/network.hpp"
@@ -208,97 +209,242 @@ struct PhaseMarks {
   }
 };
 
-// The undirected graph of the gathered edge pairs as CSR, each row ascending:
-// partitions depend on the neighbour order, and this one does not depend on
-// which rank held which edge.
+// A half-edge on its way to the block holder of its node: the node's offset
+// in that block and the neighbour.
+template <class Index>
+struct HalfRow {
+  std::int32_t v;
+  Index u;
+};
+
+// The undirected graph of the edge pairs (each rank's share) as CSR on rank
+// 0, each row ascending: partitions depend on the neighbour order, and this
+// one does not depend on which rank held which edge. Built in parallel: each
+// half-edge goes to the block holder of its node (none moves where an edge
+// has both ends in the sender's block), which counts, fills and sorts the rows
+// of its block; the rows are gathered to rank 0 in block order. Rank 0 holds
+// the CSR alone, not the gathered pairs beside it (at 10M sensors on 2 ranks
+// 0.7 GB instead of 2.0), and the rows are sorted by all ranks. Collective;
+// returns "" on success, else why not (the same on every rank). peak: this
+// rank's bytes at their largest.
 template <class Offset, class Index>
-void gathered_csr(GlobalId n, const std::vector<GlobalId>& edges, std::vector<Offset>& xadj,
-                  std::vector<Index>& adjncy) {
-  xadj.assign(static_cast<std::size_t>(n) + 1, 0);
-  adjncy.resize(edges.size());
-  for (std::size_t e = 0; e < edges.size(); e += 2) {
-    ++xadj[edges[e] + 1];
-    ++xadj[edges[e + 1] + 1];
+std::string root_csr_impl(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, std::vector<Offset>& xadj,
+                          std::vector<Index>& adjncy, std::int64_t& peak) {
+  if (n >= std::numeric_limits<int>::max()) return "graph too large for a partition on one rank (2^31 nodes)";
+  const int size = comm_size(comm), rank = comm_rank(comm);
+  // Block r holds the nodes [bfirst[r], bfirst[r + 1]); block_of finds a
+  // node's block from a floating-point guess, without integer divisions.
+  std::vector<GlobalId> bfirst(static_cast<std::size_t>(size) + 1);
+  for (int r = 0; r < size; ++r) {
+    GlobalId rb, re;
+    block_range(n, size, r, rb, re);
+    bfirst[r] = rb;
+    bfirst[r + 1] = re;
   }
-  for (GlobalId v = 0; v < n; ++v) xadj[v + 1] += xadj[v];
-  {
-    std::vector<Offset> fill(xadj.begin(), xadj.end() - 1);
-    for (std::size_t e = 0; e < edges.size(); e += 2) {
-      adjncy[fill[edges[e]]++] = static_cast<Index>(edges[e + 1]);
-      adjncy[fill[edges[e + 1]]++] = static_cast<Index>(edges[e]);
+  const double per_node = n > 0 ? static_cast<double>(size) / static_cast<double>(n) : 0.0;
+  auto block_of = [&](GlobalId v) {
+    int r = std::min(size - 1, static_cast<int>(static_cast<double>(v) * per_node));
+    while (v < bfirst[r]) --r;
+    while (v >= bfirst[r + 1]) ++r;
+    return r;
+  };
+  const std::int64_t nb = bfirst[rank + 1] - bfirst[rank];
+  auto agree = [&](bool ok) {
+    int mine = ok ? 1 : 0, all = 0;
+    MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, comm);
+    return all == 1;
+  };
+  using Half = HalfRow<Index>;
+  std::vector<Half> keep, sbuf, got;
+  std::vector<int> scount(size, 0);
+  bool ok = true;
+  try {
+    std::vector<std::int64_t> start(static_cast<std::size_t>(size) + 1, 0);
+    std::int64_t local = 0;
+    for (const GlobalId v : edges) {
+      const int r = block_of(v);
+      if (r == rank) ++local;
+      else ++start[r + 1];
+    }
+    for (int r = 0; r < size; ++r) {
+      ok = ok && start[r + 1] <= std::numeric_limits<int>::max();
+      scount[r] = static_cast<int>(start[r + 1]);
+      start[r + 1] += start[r];
+    }
+    ok = ok && start[size] <= std::numeric_limits<int>::max();
+    keep.reserve(static_cast<std::size_t>(local));
+    sbuf.resize(static_cast<std::size_t>(start[size]));
+    auto put = [&](GlobalId v, GlobalId u) {
+      const int r = block_of(v);
+      const Half h{static_cast<std::int32_t>(v - bfirst[r]), static_cast<Index>(u)};
+      if (r == rank) keep.push_back(h);
+      else sbuf[start[r]++] = h;
+    };
+    for (std::size_t k = 0; k + 1 < edges.size(); k += 2) {
+      put(edges[k], edges[k + 1]);
+      put(edges[k + 1], edges[k]);
+    }
+  } catch (const std::bad_alloc&) {
+    ok = false;
+  }
+  if (!agree(ok)) return "out of memory (or over 2^31 half-edges on a rank) building the partition's graph";
+  const auto half_bytes = static_cast<std::int64_t>((keep.capacity() + 2 * sbuf.size()) * sizeof(Half));
+  got = exchange_packed(comm, std::move(sbuf), scount);
+  // This block's rows: counted, filled (kept half-edges, then received ones in
+  // rank order), each sorted.
+  std::vector<Offset> lx;
+  std::vector<Index> ladj;
+  try {
+    lx.assign(static_cast<std::size_t>(nb) + 1, 0);
+    for (const Half& h : keep) ++lx[h.v + 1];
+    for (const Half& h : got) ++lx[h.v + 1];
+    for (std::int64_t v = 0; v < nb; ++v) lx[v + 1] += lx[v];
+    ladj.resize(static_cast<std::size_t>(lx[nb]));
+    std::vector<Offset> fill(lx.begin(), lx.end() - 1);
+    for (const Half& h : keep) ladj[fill[h.v]++] = h.u;
+    for (const Half& h : got) ladj[fill[h.v]++] = h.u;
+  } catch (const std::bad_alloc&) {
+    ok = false;
+  }
+  peak = std::max(half_bytes, static_cast<std::int64_t>((keep.capacity() + got.capacity()) * sizeof(Half) +
+                                                       (lx.size() * 2) * sizeof(Offset) + ladj.size() * sizeof(Index)));
+  release(keep);
+  release(got);
+  for (std::int64_t v = 0; v < nb && ok; ++v) std::sort(ladj.begin() + lx[v], ladj.begin() + lx[v + 1]);
+  // Row lengths to rank 0 (as offsets of each block's first row), then rank 0
+  // places every block's entries at its rows' offset.
+  std::vector<std::int64_t> first(size, 0), entries(size, 0);
+  const std::int64_t mine = static_cast<std::int64_t>(ladj.size());
+  MPI_Gather(&mine, 1, MPI_INT64_T, entries.data(), 1, MPI_INT64_T, 0, comm);
+  if (rank == 0) {
+    try {
+      xadj.assign(static_cast<std::size_t>(n) + 1, 0);
+      std::int64_t total = 0;
+      for (int r = 0; r < size; ++r) {
+        first[r] = total;
+        total += entries[r];
+      }
+      adjncy.resize(static_cast<std::size_t>(total));
+    } catch (const std::bad_alloc&) {
+      ok = false;
     }
   }
-  for (GlobalId v = 0; v < n; ++v) std::sort(adjncy.begin() + xadj[v], adjncy.begin() + xadj[v + 1]);
+  if (!agree(ok)) return "out of memory building the partition's graph on rank 0";
+  MPI_Datatype off_t_, idx_t_;
+  MPI_Type_contiguous(static_cast<int>(sizeof(Offset)), MPI_BYTE, &off_t_);
+  MPI_Type_contiguous(static_cast<int>(sizeof(Index)), MPI_BYTE, &idx_t_);
+  MPI_Type_commit(&off_t_);
+  MPI_Type_commit(&idx_t_);
+  {
+    // Each row's end offset within its block's entries; rank 0 adds the block's first offset.
+    std::vector<int> counts(size), displs(size);
+    for (int r = 0; r < size; ++r) {
+      counts[r] = static_cast<int>(bfirst[r + 1] - bfirst[r]);
+      displs[r] = static_cast<int>(bfirst[r] + 1);
+    }
+    MPI_Gatherv(lx.data() + 1, static_cast<int>(nb), off_t_, rank == 0 ? xadj.data() : nullptr, counts.data(),
+                displs.data(), off_t_, 0, comm);
+    if (rank == 0)
+      for (int r = 0; r < size; ++r)
+        for (int v = 0; v < counts[r]; ++v) xadj[displs[r] + v] += static_cast<Offset>(first[r]);
+  }
+  constexpr std::int64_t kChunk = 1LL << 27;  // entries per message (int counts)
+  if (rank == 0) {
+    std::copy(ladj.begin(), ladj.end(), adjncy.begin());
+    release(ladj);
+    for (int r = 1; r < size; ++r)
+      for (std::int64_t pos = first[r], left = entries[r]; left > 0;) {
+        const int c = static_cast<int>(std::min(left, kChunk));
+        MPI_Recv(adjncy.data() + pos, c, idx_t_, r, 12, comm, MPI_STATUS_IGNORE);
+        pos += c;
+        left -= c;
+      }
+    peak = std::max(peak, static_cast<std::int64_t>(xadj.size() * sizeof(Offset) + adjncy.size() * sizeof(Index)) +
+                              mine * static_cast<std::int64_t>(sizeof(Index)));
+  } else {
+    for (std::int64_t pos = 0, left = mine; left > 0;) {
+      const int c = static_cast<int>(std::min(left, kChunk));
+      MPI_Send(ladj.data() + pos, c, idx_t_, 0, 12, comm);
+      pos += c;
+      left -= c;
+    }
+    release(ladj);
+  }
+  MPI_Type_free(&off_t_);
+  MPI_Type_free(&idx_t_);
+  return "";
 }
 
-// METIS k-way on rank 0. Returns "" on success, else why it could not run.
-std::string metis_partition(GlobalId n, const std::vector<GlobalId>& edges, int nparts, std::vector<int>& owner,
-                            PhaseMarks& phase, std::int64_t& peak) {
-  const std::int64_t nnz = static_cast<std::int64_t>(edges.size());  // = 2E directed entries
-  static_assert(sizeof(idx_t) == 4 || sizeof(idx_t) == 8, "unexpected METIS idx_t");
+static_assert(sizeof(idx_t) == 4 || sizeof(idx_t) == 8, "unexpected METIS idx_t");
+
+// METIS k-way on rank 0 over root_csr's graph. Collective; returns "" on
+// success, else why it could not run (on rank 0; the caller broadcasts it).
+std::string metis_on_root(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, std::vector<int>& owner,
+                          PhaseMarks& phase, std::int64_t& peak) {
+  long long pairs = static_cast<long long>(edges.size() / 2), total = 0;
+  MPI_Allreduce(&pairs, &total, 1, MPI_LONG_LONG, MPI_SUM, comm);
   const std::int64_t idx_max = std::numeric_limits<idx_t>::max();
-  if (n > idx_max || nnz > idx_max)
+  if (n > idx_max || 2 * total > idx_max)
     return "graph too large for this METIS build (" + std::to_string(sizeof(idx_t) * 8) + "-bit idx_t)";
   std::vector<idx_t> xadj, adjncy;
-  gathered_csr(n, edges, xadj, adjncy);
+  std::string why = root_csr_impl(comm, n, edges, xadj, adjncy, peak);
+  if (!why.empty()) return why;
   phase("metis_graph");
-  idx_t nvtxs = static_cast<idx_t>(n), ncon = 1, np = nparts, objval = 0;
+  if (comm_rank(comm) != 0) return "";
+  idx_t nvtxs = static_cast<idx_t>(n), ncon = 1, np = comm_size(comm), objval = 0;
   idx_t options[METIS_NOPTIONS];
   METIS_SetDefaultOptions(options);
   options[METIS_OPTION_SEED] = 1;  // deterministic partitions
   options[METIS_OPTION_NUMBERING] = 0;
-  std::vector<idx_t> part(static_cast<std::size_t>(n), 0);
-  // The gathered edges, METIS's CSR and part (METIS's own workspace not counted).
-  peak = nnz * 8 + static_cast<std::int64_t>((xadj.size() + adjncy.size() + part.size()) * sizeof(idx_t));
   int status = METIS_ERROR;
   try {
+    std::vector<idx_t> part(static_cast<std::size_t>(n), 0);
+    // METIS's CSR and part (METIS's own workspace not counted).
+    peak = std::max(peak, static_cast<std::int64_t>((xadj.size() + adjncy.size() + part.size()) * sizeof(idx_t)));
     status = METIS_PartGraphKway(&nvtxs, &ncon, xadj.data(), adjncy.data(), nullptr, nullptr, nullptr, &np, nullptr,
                                  nullptr, options, &objval, part.data());
+    if (status == METIS_OK) owner.assign(part.begin(), part.end());
   } catch (...) {
-    status = METIS_ERROR;
+    status = METIS_ERROR_MEMORY;
   }
   if (status != METIS_OK) return status == METIS_ERROR_MEMORY ? "METIS ran out of memory" : "METIS failed";
-  owner.assign(part.begin(), part.end());
   phase("metis");
   return "";
 }
 
 // Breadth-first level-structure partition on rank 0 (recursive bisection
 // by breadth-first order from a pseudo-peripheral node, George and Liu's
-// level structures): far cheaper than METIS, and on geometric graphs its
-// parts are compact. Returns "" on success, else why it could not run.
-std::string bfs_on_root(GlobalId n, const std::vector<GlobalId>& edges, int nparts, std::vector<int>& owner,
+// level structures) over root_csr's graph: far cheaper than METIS, and on
+// geometric graphs its parts are compact. Collective; returns "" on success,
+// else why it could not run.
+std::string bfs_on_root(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, std::vector<int>& owner,
                         PhaseMarks& phase, std::int64_t& peak) {
   if (n > std::numeric_limits<std::int32_t>::max()) return "graph too large for the bfs partition on one rank";
   std::vector<std::int64_t> xadj;
   std::vector<std::int32_t> adjncy;
-  gathered_csr(n, edges, xadj, adjncy);
+  std::string why = root_csr_impl(comm, n, edges, xadj, adjncy, peak);
+  if (!why.empty()) return why;
   phase("bfs_graph");
-  peak = static_cast<std::int64_t>(edges.size() * 8 + xadj.size() * 8 + adjncy.size() * 4) + n * 12;
-  owner = bfs_partition(xadj, adjncy, nparts);
+  if (comm_rank(comm) != 0) return "";
+  try {
+    // The CSR and the partition's four arrays of n.
+    peak = std::max(peak, static_cast<std::int64_t>(xadj.size() * 8 + adjncy.size() * 4) + n * 16);
+    owner = bfs_partition(xadj, adjncy, comm_size(comm));
+  } catch (const std::bad_alloc&) {
+    return "out of memory in the bfs partition";
+  }
   phase("bfs");
   return "";
 }
 
-// METIS (or the bfs partition) on rank 0 over the gathered edge lists; each
-// rank gets the owners of its block (scatter). Collective; returns "" on
-// success, else why not.
+// METIS (or the bfs partition) on rank 0 over the graph of every rank's edge
+// pairs; each rank gets the owners of its block (scatter). Collective;
+// returns "" on success, else why not.
 std::string partition_on_root(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, PartitionMethod method,
                               std::vector<int>& block, PhaseMarks& phase, std::int64_t& peak) {
-  std::vector<GlobalId> all = gather_to_root(comm, edges);
-  phase("gather");
-  std::string why;
   std::vector<int> owner;
-  if (comm_rank(comm) == 0) {
-    try {
-      why = method == PartitionMethod::kBfs ? bfs_on_root(n, all, comm_size(comm), owner, phase, peak)
-                                            : metis_partition(n, all, comm_size(comm), owner, phase, peak);
-    } catch (const std::bad_alloc&) {
-      why = "out of memory building the METIS graph";
-    }
-  }
-  all.clear();
-  all.shrink_to_fit();
+  std::string why = method == PartitionMethod::kBfs ? bfs_on_root(comm, n, edges, owner, phase, peak)
+                                                    : metis_on_root(comm, n, edges, owner, phase, peak);
   why = bcast_string(comm, why);
   if (!why.empty()) return why;
   const int size = comm_size(comm);
@@ -357,8 +503,7 @@ std::string parmetis_partition(MPI_Comm comm, GlobalId n, const std::vector<Glob
   }
   peak = static_cast<std::int64_t>(mine.capacity() * sizeof(HalfEdge) +
                                    (xadj.size() + adjncy.size() + vtxdist.size()) * sizeof(pidx_t));
-  mine.clear();
-  mine.shrink_to_fit();
+  release(mine);
   phase("parmetis_graph");
   pidx_t wgtflag = 0, numflag = 0, ncon = 1, nparts = size, edgecut = 0;
   pidx_t options[3] = {0, 0, 0};
@@ -422,6 +567,11 @@ std::vector<int> block_owners(MPI_Comm comm, GlobalId n, const std::vector<Globa
 }
 
 }  // namespace
+
+std::string detail::root_csr(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges,
+                             std::vector<std::int64_t>& xadj, std::vector<std::int32_t>& adjncy, std::int64_t& peak) {
+  return root_csr_impl(comm, n, edges, xadj, adjncy, peak);
+}
 
 OwnerDirectory partition_nodes(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges,
                                PartitionMethod method, PartitionStats* stats) {

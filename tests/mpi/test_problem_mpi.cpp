@@ -3,6 +3,11 @@
 #include <gtest/gtest.h>
 #include <mpi.h>
 
+#include <algorithm>
+#include <cstdint>
+
+#include "graph/partition_detail.hpp"
+#include "snl/io/network.hpp"
 #include "solve_helpers.hpp"
 
 using namespace snl;
@@ -65,5 +70,65 @@ TEST(Problem, MovedSlabIsFreedAfterTheMergeAndGivesTheSameProblem) {
     EXPECT_EQ(a.anchor_ids(), b.anchor_ids());
     EXPECT_EQ(a.anchor_ranges(), b.anchor_ranges());
     EXPECT_EQ(a.truth(), b.truth());
+  }
+}
+
+// The serial twin of the partition's graph: every pair's two half-edges
+// counted, scattered and each row sorted, on the whole pair list at once.
+static void reference_root_csr(GlobalId n, const std::vector<GlobalId>& pairs, std::vector<std::int64_t>& xadj,
+                               std::vector<std::int32_t>& adjncy) {
+  xadj.assign(static_cast<std::size_t>(n) + 1, 0);
+  adjncy.assign(pairs.size(), 0);
+  for (const GlobalId v : pairs) ++xadj[v + 1];
+  for (GlobalId v = 0; v < n; ++v) xadj[v + 1] += xadj[v];
+  std::vector<std::int64_t> fill(xadj.begin(), xadj.end() - 1);
+  for (std::size_t k = 0; k < pairs.size(); k += 2) {
+    adjncy[fill[pairs[k]]++] = static_cast<std::int32_t>(pairs[k + 1]);
+    adjncy[fill[pairs[k + 1]]++] = static_cast<std::int32_t>(pairs[k]);
+  }
+  for (GlobalId v = 0; v < n; ++v) std::sort(adjncy.begin() + xadj[v], adjncy.begin() + xadj[v + 1]);
+}
+
+// The partition's graph on rank 0, built by the block holders of its rows,
+// equals the serial twin's on the whole pair list: with pairs dealt to the
+// ranks round robin (both ends anywhere) and by the block of their first end
+// (the merged measurements' layout, where only cut half-edges move); with
+// duplicate pairs, both orders of a pair, nodes of no pair, and more ranks
+// than nodes.
+TEST(Partition, RootGraphEqualsTheSerialTwin) {
+  const int size = world_size(), rank = world_rank();
+  for (const GlobalId n : {GlobalId{1}, GlobalId{2}, GlobalId{97}}) {
+    std::vector<GlobalId> pairs;
+    std::uint64_t x = 12345;
+    auto next = [&] { return x = x * 6364136223846793005ULL + 1442695040888963407ULL, (x >> 33); };
+    for (int k = 0; k < 300 && n > 1; ++k) {
+      const GlobalId a = static_cast<GlobalId>(next() % static_cast<std::uint64_t>(n * 3 / 4 + 1));
+      GlobalId b = static_cast<GlobalId>(next() % static_cast<std::uint64_t>(n));
+      if (b == a) b = (a + 1) % n;
+      pairs.insert(pairs.end(), {a, b});
+      if (k % 10 == 0) pairs.insert(pairs.end(), {b, a});  // the same pair again, reversed
+      if (k % 13 == 0) pairs.insert(pairs.end(), {a, b});  // a duplicate
+    }
+    std::vector<std::int64_t> want_x;
+    std::vector<std::int32_t> want_a;
+    reference_root_csr(n, pairs, want_x, want_a);
+    for (const bool by_block : {false, true}) {
+      std::vector<GlobalId> mine;
+      for (std::size_t k = 0; k < pairs.size(); k += 2) {
+        const int to = by_block ? block_owner(n, size, pairs[k]) : static_cast<int>((k / 2) % size);
+        if (to == rank) mine.insert(mine.end(), {pairs[k], pairs[k + 1]});
+      }
+      std::vector<std::int64_t> xadj;
+      std::vector<std::int32_t> adjncy;
+      std::int64_t peak = 0;
+      EXPECT_EQ(detail::root_csr(MPI_COMM_WORLD, n, mine, xadj, adjncy, peak), "");
+      if (rank == 0) {
+        EXPECT_EQ(xadj, want_x) << "n = " << n << (by_block ? ", pairs by block" : ", pairs round robin");
+        EXPECT_EQ(adjncy, want_a) << "n = " << n << (by_block ? ", pairs by block" : ", pairs round robin");
+        EXPECT_GE(peak, static_cast<std::int64_t>(want_x.size() * 8 + want_a.size() * 4));
+      } else {
+        EXPECT_TRUE(xadj.empty() && adjncy.empty());
+      }
+    }
   }
 }
