@@ -217,52 +217,51 @@ struct HalfRow {
   Index u;
 };
 
-// The undirected graph of the edge pairs (each rank's share) as CSR on rank
-// 0, each row ascending: partitions depend on the neighbour order, and this
-// one does not depend on which rank held which edge. Built in parallel: each
-// half-edge goes to the block holder of its node (none moves where an edge
-// has both ends in the sender's block), which counts, fills and sorts the rows
-// of its block; the rows are gathered to rank 0 in block order. Rank 0 holds
-// the CSR alone, not the gathered pairs beside it (at 10M sensors on 2 ranks
-// 0.7 GB instead of 2.0), and the rows are sorted by all ranks. Collective;
-// returns "" on success, else why not (the same on every rank). peak: this
-// rank's bytes at their largest.
-template <class Offset, class Index>
-std::string root_csr_impl(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, std::vector<Offset>& xadj,
-                          std::vector<Index>& adjncy, std::int64_t& peak) {
-  if (n >= std::numeric_limits<int>::max()) return "graph too large for a partition on one rank (2^31 nodes)";
-  const int size = comm_size(comm), rank = comm_rank(comm);
-  // Block r holds the nodes [bfirst[r], bfirst[r + 1]); block_of finds a
-  // node's block from a floating-point guess, without integer divisions.
-  std::vector<GlobalId> bfirst(static_cast<std::size_t>(size) + 1);
-  for (int r = 0; r < size; ++r) {
-    GlobalId rb, re;
-    block_range(n, size, r, rb, re);
-    bfirst[r] = rb;
-    bfirst[r + 1] = re;
+// The blocks of node ids (block_range): block r holds [first[r], first[r + 1]).
+struct Blocks {
+  std::vector<GlobalId> first;
+  double per_node = 0;  // blocks per node: the guess of of()
+  Blocks(GlobalId n, int size) : first(static_cast<std::size_t>(size) + 1) {
+    for (int r = 0; r < size; ++r) {
+      GlobalId rb, re;
+      block_range(n, size, r, rb, re);
+      first[r] = rb;
+      first[r + 1] = re;
+    }
+    per_node = n > 0 ? static_cast<double>(size) / static_cast<double>(n) : 0.0;
   }
-  const double per_node = n > 0 ? static_cast<double>(size) / static_cast<double>(n) : 0.0;
-  auto block_of = [&](GlobalId v) {
-    int r = std::min(size - 1, static_cast<int>(static_cast<double>(v) * per_node));
-    while (v < bfirst[r]) --r;
-    while (v >= bfirst[r + 1]) ++r;
+  int size() const { return static_cast<int>(first.size()) - 1; }
+  // The block of node v from a floating-point guess, without integer divisions.
+  int of(GlobalId v) const {
+    int r = std::min(size() - 1, static_cast<int>(static_cast<double>(v) * per_node));
+    while (v < first[r]) --r;
+    while (v >= first[r + 1]) ++r;
     return r;
-  };
-  const std::int64_t nb = bfirst[rank + 1] - bfirst[rank];
-  auto agree = [&](bool ok) {
-    int mine = ok ? 1 : 0, all = 0;
-    MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, comm);
-    return all == 1;
-  };
-  using Half = HalfRow<Index>;
-  std::vector<Half> keep, sbuf, got;
+  }
+};
+
+// Whether ok holds on every rank (collective).
+bool all_ranks(MPI_Comm comm, bool ok) {
+  int mine = ok ? 1 : 0, all = 0;
+  MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, comm);
+  return all == 1;
+}
+
+// root_csr, step 1: each pair's two half-edges to the block holders of their
+// nodes; those of this rank's block stay (keep), the others are packed by
+// destination and exchanged (got). Collective; "" or why not.
+template <class Index>
+std::string route_halves(MPI_Comm comm, const Blocks& blocks, const std::vector<GlobalId>& edges,
+                         std::vector<HalfRow<Index>>& keep, std::vector<HalfRow<Index>>& got, std::int64_t& bytes) {
+  const int size = blocks.size(), rank = comm_rank(comm);
+  std::vector<HalfRow<Index>> sbuf;
   std::vector<int> scount(size, 0);
   bool ok = true;
   try {
     std::vector<std::int64_t> start(static_cast<std::size_t>(size) + 1, 0);
     std::int64_t local = 0;
     for (const GlobalId v : edges) {
-      const int r = block_of(v);
+      const int r = blocks.of(v);
       if (r == rank) ++local;
       else ++start[r + 1];
     }
@@ -275,8 +274,8 @@ std::string root_csr_impl(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>
     keep.reserve(static_cast<std::size_t>(local));
     sbuf.resize(static_cast<std::size_t>(start[size]));
     auto put = [&](GlobalId v, GlobalId u) {
-      const int r = block_of(v);
-      const Half h{static_cast<std::int32_t>(v - bfirst[r]), static_cast<Index>(u)};
+      const int r = blocks.of(v);
+      const HalfRow<Index> h{static_cast<std::int32_t>(v - blocks.first[r]), static_cast<Index>(u)};
       if (r == rank) keep.push_back(h);
       else sbuf[start[r]++] = h;
     };
@@ -287,92 +286,132 @@ std::string root_csr_impl(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>
   } catch (const std::bad_alloc&) {
     ok = false;
   }
-  if (!agree(ok)) return "out of memory (or over 2^31 half-edges on a rank) building the partition's graph";
-  const auto half_bytes = static_cast<std::int64_t>((keep.capacity() + 2 * sbuf.size()) * sizeof(Half));
+  if (!all_ranks(comm, ok)) return "out of memory (or over 2^31 half-edges on a rank) building the partition's graph";
+  bytes = static_cast<std::int64_t>((keep.capacity() + 2 * sbuf.size()) * sizeof(HalfRow<Index>));
   got = exchange_packed(comm, std::move(sbuf), scount);
-  // This block's rows: counted, filled (kept half-edges, then received ones in
-  // rank order), each sorted.
-  std::vector<Offset> lx;
-  std::vector<Index> ladj;
+  return "";
+}
+
+// root_csr, step 2: the rows of this rank's block of nb nodes: counted,
+// filled (kept half-edges, then received ones in rank order), each sorted.
+// Consumes keep and got. Returns false when out of memory.
+template <class Offset, class Index>
+bool block_rows(std::int64_t nb, std::vector<HalfRow<Index>>&& keep, std::vector<HalfRow<Index>>&& got,
+                std::vector<Offset>& lx, std::vector<Index>& ladj, std::int64_t& bytes) {
+  bool ok = true;
   try {
     lx.assign(static_cast<std::size_t>(nb) + 1, 0);
-    for (const Half& h : keep) ++lx[h.v + 1];
-    for (const Half& h : got) ++lx[h.v + 1];
+    for (const auto& h : keep) ++lx[h.v + 1];
+    for (const auto& h : got) ++lx[h.v + 1];
     for (std::int64_t v = 0; v < nb; ++v) lx[v + 1] += lx[v];
     ladj.resize(static_cast<std::size_t>(lx[nb]));
     std::vector<Offset> fill(lx.begin(), lx.end() - 1);
-    for (const Half& h : keep) ladj[fill[h.v]++] = h.u;
-    for (const Half& h : got) ladj[fill[h.v]++] = h.u;
+    for (const auto& h : keep) ladj[fill[h.v]++] = h.u;
+    for (const auto& h : got) ladj[fill[h.v]++] = h.u;
   } catch (const std::bad_alloc&) {
     ok = false;
   }
-  peak = std::max(half_bytes, static_cast<std::int64_t>((keep.capacity() + got.capacity()) * sizeof(Half) +
-                                                       (lx.size() * 2) * sizeof(Offset) + ladj.size() * sizeof(Index)));
+  bytes = static_cast<std::int64_t>((keep.capacity() + got.capacity()) * sizeof(HalfRow<Index>) +
+                                    lx.size() * 2 * sizeof(Offset) + ladj.size() * sizeof(Index));
   release(keep);
   release(got);
   for (std::int64_t v = 0; v < nb && ok; ++v) std::sort(ladj.begin() + lx[v], ladj.begin() + lx[v + 1]);
-  // Row lengths to rank 0 (as offsets of each block's first row), then rank 0
-  // places every block's entries at its rows' offset.
+  return ok;
+}
+
+// root_csr, step 3: every block's rows to rank 0, which places them at their
+// offsets (row ends from MPI_Gatherv, entries in messages of at most 2^27).
+// Consumes lx and ladj. Collective; "" or why not.
+template <class Offset, class Index>
+std::string gather_rows(MPI_Comm comm, GlobalId n, const Blocks& blocks, std::vector<Offset>&& lx,
+                        std::vector<Index>&& ladj, std::vector<Offset>& xadj, std::vector<Index>& adjncy,
+                        std::int64_t& bytes) {
+  const int size = blocks.size(), rank = comm_rank(comm);
+  const auto nb = static_cast<int>(lx.size() - 1);
+  const auto mine = static_cast<std::int64_t>(ladj.size());
   std::vector<std::int64_t> first(size, 0), entries(size, 0);
-  const std::int64_t mine = static_cast<std::int64_t>(ladj.size());
   MPI_Gather(&mine, 1, MPI_INT64_T, entries.data(), 1, MPI_INT64_T, 0, comm);
+  bool ok = true;
   if (rank == 0) {
     try {
       xadj.assign(static_cast<std::size_t>(n) + 1, 0);
-      std::int64_t total = 0;
-      for (int r = 0; r < size; ++r) {
-        first[r] = total;
-        total += entries[r];
-      }
-      adjncy.resize(static_cast<std::size_t>(total));
+      for (int r = 1; r < size; ++r) first[r] = first[r - 1] + entries[r - 1];
+      adjncy.resize(static_cast<std::size_t>(first[size - 1] + entries[size - 1]));
     } catch (const std::bad_alloc&) {
       ok = false;
     }
   }
-  if (!agree(ok)) return "out of memory building the partition's graph on rank 0";
-  MPI_Datatype off_t_, idx_t_;
-  MPI_Type_contiguous(static_cast<int>(sizeof(Offset)), MPI_BYTE, &off_t_);
-  MPI_Type_contiguous(static_cast<int>(sizeof(Index)), MPI_BYTE, &idx_t_);
-  MPI_Type_commit(&off_t_);
-  MPI_Type_commit(&idx_t_);
-  {
-    // Each row's end offset within its block's entries; rank 0 adds the block's first offset.
-    std::vector<int> counts(size), displs(size);
-    for (int r = 0; r < size; ++r) {
-      counts[r] = static_cast<int>(bfirst[r + 1] - bfirst[r]);
-      displs[r] = static_cast<int>(bfirst[r] + 1);
-    }
-    MPI_Gatherv(lx.data() + 1, static_cast<int>(nb), off_t_, rank == 0 ? xadj.data() : nullptr, counts.data(),
-                displs.data(), off_t_, 0, comm);
-    if (rank == 0)
-      for (int r = 0; r < size; ++r)
-        for (int v = 0; v < counts[r]; ++v) xadj[displs[r] + v] += static_cast<Offset>(first[r]);
+  if (!all_ranks(comm, ok)) return "out of memory building the partition's graph on rank 0";
+  MPI_Datatype off_type, idx_type;
+  MPI_Type_contiguous(static_cast<int>(sizeof(Offset)), MPI_BYTE, &off_type);
+  MPI_Type_contiguous(static_cast<int>(sizeof(Index)), MPI_BYTE, &idx_type);
+  MPI_Type_commit(&off_type);
+  MPI_Type_commit(&idx_type);
+  // Each row's end within its block's entries; rank 0 adds the block's first offset.
+  std::vector<int> counts(size), displs(size);
+  for (int r = 0; r < size; ++r) {
+    counts[r] = static_cast<int>(blocks.first[r + 1] - blocks.first[r]);
+    displs[r] = static_cast<int>(blocks.first[r] + 1);
   }
+  MPI_Gatherv(lx.data() + 1, nb, off_type, rank == 0 ? xadj.data() : nullptr, counts.data(), displs.data(), off_type, 0,
+              comm);
+  release(lx);
   constexpr std::int64_t kChunk = 1LL << 27;  // entries per message (int counts)
   if (rank == 0) {
+    for (int r = 0; r < size; ++r)
+      for (int v = 0; v < counts[r]; ++v) xadj[displs[r] + v] += static_cast<Offset>(first[r]);
     std::copy(ladj.begin(), ladj.end(), adjncy.begin());
     release(ladj);
     for (int r = 1; r < size; ++r)
       for (std::int64_t pos = first[r], left = entries[r]; left > 0;) {
         const int c = static_cast<int>(std::min(left, kChunk));
-        MPI_Recv(adjncy.data() + pos, c, idx_t_, r, 12, comm, MPI_STATUS_IGNORE);
+        MPI_Recv(adjncy.data() + pos, c, idx_type, r, 12, comm, MPI_STATUS_IGNORE);
         pos += c;
         left -= c;
       }
-    peak = std::max(peak, static_cast<std::int64_t>(xadj.size() * sizeof(Offset) + adjncy.size() * sizeof(Index)) +
-                              mine * static_cast<std::int64_t>(sizeof(Index)));
+    bytes = static_cast<std::int64_t>(xadj.size() * sizeof(Offset) + adjncy.size() * sizeof(Index)) +
+            mine * static_cast<std::int64_t>(sizeof(Index));
   } else {
     for (std::int64_t pos = 0, left = mine; left > 0;) {
       const int c = static_cast<int>(std::min(left, kChunk));
-      MPI_Send(ladj.data() + pos, c, idx_t_, 0, 12, comm);
+      MPI_Send(ladj.data() + pos, c, idx_type, 0, 12, comm);
       pos += c;
       left -= c;
     }
     release(ladj);
   }
-  MPI_Type_free(&off_t_);
-  MPI_Type_free(&idx_t_);
+  MPI_Type_free(&off_type);
+  MPI_Type_free(&idx_type);
   return "";
+}
+
+// The undirected graph of the edge pairs (each rank's share) as CSR on rank
+// 0, each row ascending: partitions depend on the neighbour order, and this
+// one does not depend on which rank held which edge. Built in parallel: each
+// half-edge goes to the block holder of its node (none moves where an edge
+// has both ends in the sender's block), which counts, fills and sorts the rows
+// of its block; the rows are gathered to rank 0 in block order. Rank 0 holds
+// the CSR alone, not the gathered pairs beside it (at 10M sensors on 2 ranks
+// 1.0 GB instead of 2.0), and the rows are sorted by all ranks. Collective;
+// returns "" on success, else why not (the same on every rank). peak: this
+// rank's bytes at their largest.
+template <class Offset, class Index>
+std::string root_csr_impl(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, std::vector<Offset>& xadj,
+                          std::vector<Index>& adjncy, std::int64_t& peak) {
+  if (n >= std::numeric_limits<int>::max()) return "graph too large for a partition on one rank (2^31 nodes)";
+  const Blocks blocks(n, comm_size(comm));
+  const int rank = comm_rank(comm);
+  std::vector<HalfRow<Index>> keep, got;
+  std::int64_t routed = 0, rows = 0, gathered = 0;
+  std::string why = route_halves(comm, blocks, edges, keep, got, routed);
+  if (!why.empty()) return why;
+  std::vector<Offset> lx;
+  std::vector<Index> ladj;
+  const bool ok = block_rows(blocks.first[rank + 1] - blocks.first[rank], std::move(keep), std::move(got), lx, ladj, rows);
+  if (!all_ranks(comm, ok)) return "out of memory building the partition's graph";
+  why = gather_rows(comm, n, blocks, std::move(lx), std::move(ladj), xadj, adjncy, gathered);
+  peak = std::max({routed, rows, gathered});
+  return why;
 }
 
 static_assert(sizeof(idx_t) == 4 || sizeof(idx_t) == 8, "unexpected METIS idx_t");
