@@ -91,5 +91,18 @@ wait_caught() {
   done
   return 1
 }
+# kill_session PID: SIGKILL every process of the session PID leads (a run
+# started with setsid) and wait until none is left running. Open MPI puts each
+# rank in a process group of its own, so killing mpirun's group alone leaves
+# the ranks running (and writing checkpoints) for a while after it.
+kill_session() {
+  local sid=$1
+  pkill -KILL -s "$sid" 2> /dev/null || true
+  wait "$sid" 2> /dev/null || true
+  for _ in $(seq 250); do
+    ps -o stat= -s "$sid" 2> /dev/null | grep -qv '^Z' || return 0
+    sleep 0.02
+  done
+}
 mpi() { local np=$1; shift; run_watched "$MPIEXEC" "$MPIEXEC_NUMPROC_FLAG" "$np" --oversubscribe "$@"; }
 

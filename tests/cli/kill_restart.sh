@@ -22,8 +22,7 @@ start_run() {
   pid=$!
 }
 kill_run() {
-  kill -9 -- -$pid 2>/dev/null || true
-  wait $pid 2>/dev/null || true
+  kill_session $pid  # mpirun and its ranks (each in a process group of its own)
   rm -f "$T"/ck.h5.tmp*  # what a killed writer leaves
 }
 # resumed_from LOG: the total iteration the run in LOG resumed from ("" if it did not resume).

@@ -56,7 +56,6 @@ after=$(echo "$t1 - $t0" | bc)
 [ "$(echo "$after >= 1" | bc)" = 1 ] || fail "--checkpoint-seconds 1: a checkpoint after only $after s"
 echo "--checkpoint-seconds 1: first checkpoint after $after s"
 # The file is renamed into place complete: stop the run (SIGKILL, all its processes) and resume from it.
-kill -9 -- -$pid 2>/dev/null || true
-wait $pid 2>/dev/null || true
+kill_session $pid
 resume "$T/sec.h5"
 echo "signals: ok"
