@@ -557,9 +557,7 @@ std::string parmetis_partition(MPI_Comm comm, GlobalId n, const std::vector<Glob
   } catch (...) {
     status = METIS_ERROR;
   }
-  int ok = status == METIS_OK ? 1 : 0, all_ok = 0;
-  MPI_Allreduce(&ok, &all_ok, 1, MPI_INT, MPI_MIN, comm);
-  if (!all_ok) return "ParMETIS (PT-Scotch) failed";
+  if (!all_ranks(comm, status == METIS_OK)) return "ParMETIS (PT-Scotch) failed";
   block.assign(part.begin(), part.end());
   phase("parmetis");
   return "";
