@@ -7,7 +7,8 @@
 # given, each under the shared bench lock;
 # prints the load average before and after each, and per run: iterations,
 # solve_seconds, iterate_seconds, the fraction outside 1 - iterate / solve,
-# stop_test_seconds and record_seconds (where the binary reports them), RMSE,
+# stop_test_seconds, record_seconds and gradient_tests (where the binary
+# reports them), RMSE,
 # and whether the positions equal the first binary's, byte for byte.
 set -euo pipefail
 NET=${NET:?NET=network.h5}
@@ -39,6 +40,7 @@ same = h5py.File(sys.argv[2], "r")["positions"][()].tobytes() == h5py.File(sys.a
 s, it = d["solve_seconds"], d["iterate_seconds"]
 print(f"iterations {d['iterations']} solve_s {s:.2f} iterate_s {it:.2f} outside {1 - it / s:.3f} "
       f"stop_test_s {d.get('stop_test_seconds', 'n/a')} record_s {d.get('record_seconds', 'n/a')} "
+      f"gradient_tests {d.get('gradient_tests', 'n/a')} "
       f"rmse {d.get('rmse')} ml_cost {d['ml_cost']!r} positions_equal_first {same}")
 PY
 done

@@ -316,6 +316,7 @@ std::string json_summary(const SolveCommand& cmd, const LoadedProblem& lp, const
       .add("seconds_per_iteration", iters > 0 ? s.iterate_seconds / double(iters) : 0.0)
       .add("stop_test_seconds", s.stop_test_seconds)
       .add("record_seconds", s.record_seconds)
+      .add("gradient_tests", s.gradient_tests)
       .add("iterate_wait_fraction", s.iterate_seconds > 0 ? s.iterate_wait_seconds / s.iterate_seconds : 0.0)
       .add("peak_rss_bytes_total", static_cast<std::int64_t>(m.tot[0]))
       .add("peak_rss_bytes_max", static_cast<std::int64_t>(m.mx[0]))

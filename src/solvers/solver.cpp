@@ -160,6 +160,11 @@ class Solver::Run {
     std::int64_t every = 1;     // record interval
     std::int64_t block = 1;     // iterations per pass at most
     std::int64_t stop_every = 1;  // --stop gradient: the test's interval (a multiple of every)
+    // The grown schedule (large networks, automatic intervals): the test's
+    // interval grows from stop_every with the iterations done (test_interval),
+    // and a record falls on every record_tests-th one; 0: fixed intervals.
+    double test_cost = 0;
+    std::int64_t record_tests = 0;
     double prev_obj = 0;        // for check_monotone
     double time = 0;            // in iterate()
     double stop_time = 0;       // in the stopping sums and tests (reduce, relative_gradient)
@@ -184,6 +189,9 @@ class Solver::Run {
   void set_pass_sizes(Phase& ph) const;
   bool pass(Phase& ph);  // false: the phase ends
   std::int64_t pass_length(const Phase& ph) const;
+  std::int64_t test_interval(const Phase& ph) const;
+  bool test_due(const Phase& ph) const;
+  bool record_due(const Phase& ph) const;
   void iterate(Phase& ph, std::int64_t n);
   PassResult reduce(Phase& ph);
   bool test_stop(Phase& ph, const PassResult& r) const;
@@ -310,12 +318,23 @@ void Solver::Run::start_phase(Phase& ph) {
 }
 
 // Above 100,000 sensors: the automatic record interval (at least) and the
-// automatic gradient-test interval. A test costs about three iterations there
-// (docs/performance.md, "Bookkeeping outside the iterations"): every 50
-// iterations keeps it near 5% of the solve; a converged phase stops up to 49
-// iterations after it could have, a small part of the thousands it runs.
+// automatic gradient-test interval at the start of a phase (docs/performance.md,
+// "Bookkeeping outside the iterations").
 constexpr std::int64_t kLargeRecordEvery = 100;
 constexpr std::int64_t kLargeTestEvery = 50;
+
+// A gradient test's cost in iterations of the method (an exchange and a scalar
+// pass over the edges against the methods' SIMD kernels), measured on the
+// default 1M network on 2 ranks (docs/performance.md); 0: not modelled, the
+// interval stays fixed.
+double gradient_test_cost(AlgorithmId id) {
+  switch (id) {
+    case AlgorithmId::kRelaxation: return 7;
+    case AlgorithmId::kMM: return 7;
+    case AlgorithmId::kMMAccel: return 2.5;
+    default: return 0;
+  }
+}
 
 void Solver::Run::set_pass_sizes(Phase& ph) const {
   // Auto: every iteration for small runs; about 1000 records per phase for
@@ -342,22 +361,51 @@ void Solver::Run::set_pass_sizes(Phase& ph) const {
   // costs about three iterations on large networks (docs/performance.md,
   // "Bookkeeping"): there the automatic interval is a multiple of the test's,
   // at least 100, which leaves the tests, and so the iterates, where they were.
-  if (opt_.history_every <= 0 && large) ph.every = ph.stop_every * ((kLargeRecordEvery + ph.stop_every - 1) / ph.stop_every);
+  const std::int64_t record_tests = (kLargeRecordEvery + ph.stop_every - 1) / ph.stop_every;
+  if (opt_.history_every <= 0 && large) ph.every = ph.stop_every * record_tests;
+  // Tests T iterations dear, k iterations into a phase: an interval I costs
+  // T/I of the iterations in tests and, once the phase has converged, I/2
+  // iterations on average before a test sees it; I = sqrt(2 T k) makes the
+  // sum smallest, sqrt(2 T / k) of the iterations. So with the automatic
+  // interval on large networks the interval grows so, in steps of its start
+  // (a function of k alone: the same tests for any partition and on a
+  // resume), and the automatic records follow the tests.
+  const bool tests = opt_.stop == "gradient" && opt_.stop_tol() > 0;
+  ph.test_cost = large && tests && opt_.test_every <= 0 ? gradient_test_cost(ph.info->id) : 0;
+  ph.record_tests = ph.test_cost > 0 && opt_.history_every <= 0 ? record_tests : 0;
+  if (ph.record_tests > 0) ph.every = ph.stop_every;  // the grid the records fall on
+}
+
+std::int64_t Solver::Run::test_interval(const Phase& ph) const {
+  if (ph.test_cost <= 0) return ph.stop_every;
+  const double best = std::sqrt(2.0 * ph.test_cost * static_cast<double>(ph.k));
+  return ph.stop_every * std::max<std::int64_t>(1, static_cast<std::int64_t>(best / static_cast<double>(ph.stop_every)));
+}
+
+bool Solver::Run::test_due(const Phase& ph) const {
+  return ph.k % test_interval(ph) == 0 || ph.k == opt_.max_iter;
+}
+
+bool Solver::Run::record_due(const Phase& ph) const {
+  const std::int64_t every = ph.record_tests > 0 ? test_interval(ph) * ph.record_tests : ph.every;
+  return ph.k % every == 0 || ph.k == opt_.max_iter;
 }
 
 bool Solver::Run::pass(Phase& ph) {
   iterate(ph, pass_length(ph));
   const double t0 = MPI_Wtime();
   PassResult r = reduce(ph);
-  if (opt_.stop == "gradient" && opt_.stop_tol() > 0 && r.finite && (ph.k % ph.stop_every == 0 || ph.k == opt_.max_iter))
+  if (opt_.stop == "gradient" && opt_.stop_tol() > 0 && r.finite && test_due(ph)) {
     r.rel_grad = relative_gradient(ph);
+    ++sum_.gradient_tests;
+  }
   ph.stop_time += MPI_Wtime() - t0;
   if (!r.finite) return stop(ph, TerminationType::kFailure, "non-finite iterate");
   const bool converged = test_stop(ph, r);
   if (opt_.check_monotone && ph.info->monotone_surrogate) check_monotone(ph);
   const bool last = converged || ph.k == opt_.max_iter;
   const double t1 = MPI_Wtime();
-  const bool abort = (ph.k % ph.every == 0 || last) && record(ph, r);
+  const bool abort = (record_due(ph) || last) && record(ph, r);
   ph.record_time += MPI_Wtime() - t1;
   if (abort) return stop(ph, TerminationType::kUserAbort, "stopped by a callback");
   if (converged) {
@@ -407,9 +455,9 @@ void Solver::Run::iterate(Phase& ph, std::int64_t n) {
 // them: elsewhere they only check that the iterate is finite, which plain sums
 // decide unless one comes near overflow (then every rank forms the exact ones).
 Solver::Run::PassResult Solver::Run::reduce(Phase& ph) {
-  const bool record_due = ph.k % ph.every == 0 || ph.k == opt_.max_iter;
-  const bool with_grad = opt_.grad_tol > 0 || record_due;
-  const bool exact = opt_.stop != "gradient" || opt_.grad_tol > 0 || ph.info->one_shot || record_due;
+  const bool at_record = record_due(ph);
+  const bool with_grad = opt_.grad_tol > 0 || at_record;
+  const bool exact = opt_.stop != "gradient" || opt_.grad_tol > 0 || ph.info->one_shot || at_record;
   detail::ExactSum sums[3];  // ||x(k)-x(k-1)||^2, ||x(k)||^2, ||g||^2
   const bool plain_ok = add_stop_terms(ph, with_grad, exact, sums);
   // Summed over ranks: > 0 means "on some rank" (signal, clock, a plain sum not decisive).
@@ -440,20 +488,19 @@ Solver::Run::PassResult Solver::Run::reduce(Phase& ph) {
 
 // This rank's terms of the stopping sums: per owned node where the method
 // keeps x(k-1) and its gradient (the same terms for any partition), else the
-// method's own partial sums. Without `exact` (and where the method keeps
-// x(k-1)) only plain sums are formed; returns whether they are finite and
-// below 1e290, i.e. whether they show the exact sums over all ranks finite.
+// method's own partial sums. Without `exact` only the method's own sums are
+// read (the relaxation's and MM's kernels form them as they write x(k), so
+// this costs no pass over memory); returns whether they are finite and below
+// 1e290, i.e. whether they show the exact sums over all ranks finite.
 bool Solver::Run::add_stop_terms(Phase& ph, bool with_grad, bool exact, detail::ExactSum* sums) {
   const LocalId n = prob_.num_owned();
   const double* x = ph.alg->positions().data();
-  if (const double* prev = ph.alg->previous_positions(); prev && !exact) {
-    double dd = 0, xs = 0;
-    for (std::size_t t = 0; t < std::size_t(n) * p_; ++t) {
-      dd += (x[t] - prev[t]) * (x[t] - prev[t]);
-      xs += x[t] * x[t];
-    }
-    return dd < 1e290 && xs < 1e290;  // false for NaN
-  } else if (prev) {
+  if (!exact) {
+    double d = 0, s = 0;
+    ph.alg->change_norms(&d, &s);
+    return d < 1e290 && s < 1e290;  // false for NaN
+  }
+  if (const double* prev = ph.alg->previous_positions()) {
     for (LocalId v = 0; v < n; ++v) {
       double dd = 0, xs = 0;
       for (int c = 0; c < p_; ++c) {
@@ -469,7 +516,6 @@ bool Solver::Run::add_stop_terms(Phase& ph, bool with_grad, bool exact, detail::
     ph.alg->change_norms(&d, &s);
     sums[0].add(d);
     sums[1].add(s);
-    if (!exact) return std::isfinite(d) && std::isfinite(s) && d < 1e290 && s < 1e290;
   }
   if (!with_grad || !std::isfinite(ph.alg->grad_norm_sq())) return true;
   const std::int64_t b0 = halo_.bytes_sent();  // a ghost exchange here is instrumentation

@@ -5,9 +5,11 @@
 #include <gtest/gtest.h>
 #include <mpi.h>
 
+#include <cmath>
 #include <cstring>
 
 #include "kernels/kernels.hpp"
+#include "snl/problem/generate.hpp"
 #include "solve_helpers.hpp"
 
 using namespace snl;
@@ -121,6 +123,73 @@ TEST(Solver, StopsOnRelativeImprovementAndRecordsHistory) {
   EXPECT_LE(s.costs.ml, ml_relax * (1 + 1e-12));
   EXPECT_TRUE(s.errors.valid);
   EXPECT_LT(s.errors.rmse, 0.05);
+}
+
+// Above 100,000 sensors the automatic gradient-test interval grows with the
+// iterations k done, 50 floor(sqrt(2 T k) / 50) with T = 7 for the relaxation,
+// and the automatic records fall on every second test: the history's rows
+// show the schedule. An explicit --test-every keeps it fixed.
+TEST(Solver, LargeNetworksSpaceTheirTestsAsTheSquareRootOfTheIterations) {
+  GenerateOptions g;
+  g.sensors = 100050;
+  g.avg_degree = 6;
+  const Network whole = generate_network(g);
+  LocalizationProblem prob(MPI_COMM_WORLD, slab_of(whole, MPI_COMM_WORLD), PartitionMethod::kBfs, nullptr);
+  std::int64_t tests = 0;
+  auto records = [&](std::int64_t test_every) {
+    SolverOptions opt;
+    opt.algorithm = "relaxation";
+    opt.max_iter = 1100;
+    opt.tol = 1e-12;  // tested, never met
+    opt.test_every = test_every;
+    Solver solver(prob, opt);
+    std::vector<std::int64_t> its;
+    const Summary s = solver.solve(random_initial_positions(prob, 3), nullptr);
+    for (const auto& h : s.history) its.push_back(h.iteration);
+    tests = s.gradient_tests;
+    return its;
+  };
+  std::vector<std::int64_t> grown, fixed;
+  for (std::int64_t k = 0; k <= 1100; k += 50) {
+    const std::int64_t interval = std::max<std::int64_t>(50, 50 * std::int64_t(std::sqrt(14.0 * double(k)) / 50));
+    if (k % (2 * interval) == 0 || k == 1100) grown.push_back(k);
+    if (k % 100 == 0 || k == 1100) fixed.push_back(k);
+  }
+  // 100 apart up to 800; 200 apart from there (the interval is 100 from k = 715).
+  ASSERT_EQ(grown, (std::vector<std::int64_t>{0, 100, 200, 300, 400, 500, 600, 700, 800, 1000, 1100}));
+  EXPECT_EQ(records(0), grown);
+  EXPECT_EQ(tests, 14 + 4);  // 50, 100, ..., 700; 800, 900, 1000, 1100
+  EXPECT_EQ(records(50), fixed);
+  EXPECT_EQ(tests, 22);
+}
+
+// A network scaled to 1e155 (a node's |x|^2 overflows to +inf) stops with a
+// failure at the same iteration on any number of ranks: the per-pass check
+// (records are rare here) reads the methods' own sums, not decisive there,
+// and every rank then forms the exact ones.
+TEST(Solver, OverflowStopsEveryRankAtTheSameIteration) {
+  Network w = make_network({.n = 120, .dim = 2, .radius = 0.2, .anchor_radius = 0.3, .sigma = 0.05});
+  for (auto* v : {&w.sensor_ranges, &w.anchor_ranges, &w.anchors, &w.truth})
+    for (auto& r : *v) r *= 1e155;
+  for (const char* alg : {"relaxation", "mm", "mm-accel"}) {
+    std::int64_t first = -1;
+    for (int k = 1; k <= world_size(); ++k) {
+      MPI_Comm sub;
+      MPI_Comm_split(MPI_COMM_WORLD, world_rank() < k ? 0 : MPI_UNDEFINED, world_rank(), &sub);
+      if (sub == MPI_COMM_NULL) continue;
+      SolverOptions opt;
+      opt.algorithm = alg;
+      opt.max_iter = 200;
+      opt.history_every = 1000;  // no record, so no exact sums, before max_iter
+      const snl::test::Outcome o = snl::test::solve_outcome(sub, w, opt);
+      EXPECT_EQ(o.s.termination, TerminationType::kFailure) << alg << " on " << k << " ranks: " << o.s.message;
+      EXPECT_EQ(o.s.message, "non-finite iterate") << alg;
+      EXPECT_LT(o.s.iterations, opt.max_iter) << alg;
+      if (first < 0) first = o.s.iterations;
+      EXPECT_EQ(o.s.iterations, first) << alg << " on " << k << " ranks";
+      MPI_Comm_free(&sub);
+    }
+  }
 }
 
 TEST(Solver, RejectsBadOptions) {

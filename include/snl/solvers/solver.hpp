@@ -46,7 +46,8 @@ struct SolverOptions {
   ///             MM, mm-accel and BB, f_hat for the others): the gradient against
   ///             the norm it would have if its edge terms did not cancel
   ///             (docs/quality.md, "Stopping rule"), tested every
-  ///             test_every iterations.
+  ///             test_every iterations (0: automatic; above 100,000 sensors
+  ///             an interval that grows with the iterations done).
   std::string stop = "gradient";
   /// The refinement the pipeline runs after the relaxation: mm | mm-accel, or
   /// auto (the default): mm-accel, under every measurement model (it reaches
@@ -139,6 +140,8 @@ struct Summary {
   /// Bookkeeping outside iterate(), max over ranks: the stopping sums and
   /// tests of every pass, and the records (history metrics, callbacks).
   double stop_test_seconds = 0, record_seconds = 0;
+  /// Gradient stopping tests run (--stop gradient), over all phases.
+  std::int64_t gradient_tests = 0;
   /// Per phase (pipeline: relaxation then mm), same meaning as iterate_seconds.
   std::vector<std::pair<std::string, double>> phase_iterate_seconds;
   /// Algorithm state (iterates, edge variables), all ranks; max over phases.
