@@ -157,9 +157,9 @@ class Solver::Run {
     const AlgorithmInfo* info = nullptr;  // of this phase's method
     std::unique_ptr<Algorithm> alg;
     std::int64_t k = 0;         // iterations done in this phase
-    std::int64_t every = 1;     // record interval
+    std::int64_t every = 1;     // record interval (the grown schedule: the grid records fall on)
     std::int64_t block = 1;     // iterations per pass at most
-    std::int64_t stop_every = 1;  // --stop gradient: the test's interval (a multiple of every)
+    std::int64_t stop_every = 1;  // --stop gradient: the test's (first) interval, a multiple of every
     // The grown schedule (large networks, automatic intervals): the test's
     // interval grows from stop_every with the iterations done (test_interval),
     // and a record falls on every record_tests-th one; 0: fixed intervals.
@@ -187,6 +187,7 @@ class Solver::Run {
   double relative_gradient(Phase& ph);
   void start_phase(Phase& ph);
   void set_pass_sizes(Phase& ph) const;
+  bool gradient_rule() const { return opt_.stop == "gradient" && opt_.stop_tol() > 0; }
   bool pass(Phase& ph);  // false: the phase ends
   std::int64_t pass_length(const Phase& ph) const;
   std::int64_t test_interval(const Phase& ph) const;
@@ -338,9 +339,8 @@ double gradient_test_cost(AlgorithmId id) {
 
 void Solver::Run::set_pass_sizes(Phase& ph) const {
   // Auto: every iteration for small runs; about 1000 records per phase for
-  // long ones; at least every 10 iterations on large networks, where the
-  // gradient test (an extra exchange and two passes over the edges) costs
-  // about two iterations.
+  // long ones; at least every 10 iterations on large networks, where a record
+  // and the gradient test cost several iterations (gradient_test_cost).
   std::int64_t every = opt_.history_every;
   const bool large = prob_.num_sensors() > 100000;
   if (every <= 0) {
@@ -370,8 +370,7 @@ void Solver::Run::set_pass_sizes(Phase& ph) const {
   // interval on large networks the interval grows so, in steps of its start
   // (a function of k alone: the same tests for any partition and on a
   // resume), and the automatic records follow the tests.
-  const bool tests = opt_.stop == "gradient" && opt_.stop_tol() > 0;
-  ph.test_cost = large && tests && opt_.test_every <= 0 ? gradient_test_cost(ph.info->id) : 0;
+  ph.test_cost = large && gradient_rule() && opt_.test_every <= 0 ? gradient_test_cost(ph.info->id) : 0;
   ph.record_tests = ph.test_cost > 0 && opt_.history_every <= 0 ? record_tests : 0;
   if (ph.record_tests > 0) ph.every = ph.stop_every;  // the grid the records fall on
 }
@@ -395,7 +394,7 @@ bool Solver::Run::pass(Phase& ph) {
   iterate(ph, pass_length(ph));
   const double t0 = MPI_Wtime();
   PassResult r = reduce(ph);
-  if (opt_.stop == "gradient" && opt_.stop_tol() > 0 && r.finite && test_due(ph)) {
+  if (gradient_rule() && r.finite && test_due(ph)) {
     r.rel_grad = relative_gradient(ph);
     ++sum_.gradient_tests;
   }
