@@ -6,6 +6,7 @@
 #include <limits>
 #include <numeric>
 
+#include "graph/partition_detail.hpp"
 #include "snl/core/mpi_util.hpp"
 #include "snl/io/network.hpp"
 
@@ -56,16 +57,17 @@ void sort_degree_windows(std::vector<std::int64_t>& grp, const std::vector<std::
 }
 
 // The adjacency of one group (interior or boundary) in group positions
-// (32-bit), neighbours in the same order as in `nbrs`: the scattered nodes ->
-// cnt -> nbrs -> pos lookups are done once here instead of in each of the two
-// BFS sweeps of rcm_order.
+// (32-bit), neighbours in list order; nbr(k) is entry k's owned index, or -1
+// for a ghost. The scattered nodes -> cnt -> entries -> pos lookups are done
+// once here instead of in each of the two BFS sweeps of rcm_order.
 struct GroupGraph {
   std::vector<std::int64_t> off;
   std::vector<std::int32_t> adj, deg;
 };
 
-GroupGraph group_graph(const std::vector<std::int64_t>& nodes, const std::vector<std::int64_t>& cnt,
-                       const std::vector<std::int64_t>& nbrs, const std::vector<std::int64_t>& pos) {
+template <class Nbr>
+GroupGraph group_graph(const std::vector<std::int64_t>& nodes, const std::vector<std::int64_t>& cnt, Nbr&& nbr,
+                       const std::vector<std::int64_t>& pos) {
   const std::size_t m = nodes.size();
   GroupGraph g;
   g.off.assign(m + 1, 0);
@@ -76,7 +78,7 @@ GroupGraph group_graph(const std::vector<std::int64_t>& nodes, const std::vector
   }
   for (std::size_t t = 0; t < m; ++t) {
     for (auto k = cnt[nodes[t]]; k < cnt[nodes[t] + 1]; ++k)
-      if (nbrs[k] >= 0 && pos[nbrs[k]] >= 0) g.adj.push_back(static_cast<std::int32_t>(pos[nbrs[k]]));
+      if (const std::int64_t u = nbr(k); u >= 0 && pos[u] >= 0) g.adj.push_back(static_cast<std::int32_t>(pos[u]));
     g.off[t + 1] = static_cast<std::int64_t>(g.adj.size());
   }
   g.deg.resize(m);
@@ -136,6 +138,18 @@ class CuthillMcKee {
   // node's unseen neighbours by increasing degree.
   void sweep(std::size_t head) {
     for (; head < order.size(); ++head) {
+      // The queue is known ahead: its offsets, lists and the neighbours'
+      // flags are fetched ahead (a random graph order otherwise stalls on
+      // each of the three in turn), as in bfs_partition.
+      if (head + 16 < order.size()) __builtin_prefetch(&g_.off[order[head + 16]]);
+      if (head + 8 < order.size()) __builtin_prefetch(&g_.adj[g_.off[order[head + 8]]]);
+      if (head + 4 < order.size()) {
+        const std::int64_t w = order[head + 4];
+        for (auto k = g_.off[w]; k < g_.off[w + 1]; ++k) {
+          __builtin_prefetch(&seen_[g_.adj[k]]);
+          __builtin_prefetch(&g_.deg[g_.adj[k]]);
+        }
+      }
       const std::int64_t t = order[head];
       kids_.clear();
       for (auto k = g_.off[t]; k < g_.off[t + 1]; ++k) {
@@ -166,7 +180,7 @@ class CuthillMcKee {
   std::vector<std::int64_t> kids_, queue_;
 };
 
-// Reverse Cuthill-McKee of the graph (cnt, nbrs) restricted to `nodes` (one
+// Reverse Cuthill-McKee of the graph (cnt, nbr: as group_graph) restricted to `nodes` (one
 // group: interior or boundary): BFS from a pseudo-peripheral node (George-Liu,
 // one sweep), children by increasing degree, then reversed. `pos[v]` is v's
 // position in `nodes` or -1 for nodes outside the group. With `seeds`
@@ -176,10 +190,11 @@ class CuthillMcKee {
 // farthest from the boundary to those next to it, in layers (temporal
 // blocking defers the chunks near the boundary: they are then contiguous).
 // Deterministic: ties are broken by the order of `nodes` (global id order).
+template <class Nbr>
 std::vector<std::int64_t> rcm_order(const std::vector<std::int64_t>& nodes, const std::vector<std::int64_t>& cnt,
-                                    const std::vector<std::int64_t>& nbrs, const std::vector<std::int64_t>& pos,
+                                    Nbr&& nbr, const std::vector<std::int64_t>& pos,
                                     const std::vector<std::int64_t>& seeds) {
-  const GroupGraph g = group_graph(nodes, cnt, nbrs, pos);
+  const GroupGraph g = group_graph(nodes, cnt, nbr, pos);
   const std::vector<std::int64_t> candidates = by_degree(g.deg);
   CuthillMcKee cm(g);
   for (std::int64_t t : seeds)
@@ -252,14 +267,76 @@ struct HalfTagged {
   std::int32_t oa, ia;
 };
 
+// The directory slot of each record's b, in record order: looked up here
+// when b is in this rank's block, else asked of its block holder (the ids
+// out and the slots back, 16 bytes per edge, where moving the records to the
+// block holder and on from there moved 32 + 8 width bytes and allocated a
+// second copy of them). Collective.
+std::vector<OwnerDirectory::Slot> slots_of_b(MPI_Comm comm, const OwnerDirectory& dir,
+                                             const std::vector<HalfTagged>& half) {
+  const int size = comm_size(comm), rank = comm_rank(comm);
+  const detail::Blocks blocks(dir.num_global(), size);
+  std::vector<OwnerDirectory::Slot> slot(half.size());
+  std::vector<std::int64_t> start(static_cast<std::size_t>(size) + 1, 0);
+  for (const auto& h : half) {
+    const int r = blocks.of(h.b);
+    if (r != rank) ++start[r + 1];
+  }
+  std::vector<int> scount;
+  pack_offsets(start, scount, 1, "directory lookup");
+  std::vector<std::int64_t> first(start.begin(), start.end() - 1);
+  std::vector<GlobalId> ask(static_cast<std::size_t>(start[size]));
+  constexpr std::size_t kAhead = 16;  // directory lookups in flight (OwnerDirectory::prefetch)
+  auto mine = [&](GlobalId g) { return g >= dir.block_begin() && g < dir.block_end(); };
+  for (std::size_t k = 0; k < half.size(); ++k) {
+    if (k + kAhead < half.size() && mine(half[k + kAhead].b)) dir.prefetch(half[k + kAhead].b);
+    if (mine(half[k].b)) slot[k] = dir.local(half[k].b);
+    else ask[start[blocks.of(half[k].b)]++] = half[k].b;
+  }
+  // The questions to their block holders, the answers back in the same order.
+  std::vector<int> rcount(size), sdisp(size), rdisp(size);
+  MPI_Alltoall(scount.data(), 1, MPI_INT, rcount.data(), 1, MPI_INT, comm);
+  std::int64_t rtot = 0;
+  for (int r = 0; r < size; ++r) {
+    sdisp[r] = static_cast<int>(first[r]);
+    rdisp[r] = static_cast<int>(rtot);
+    rtot += rcount[r];
+  }
+  int ok = rtot <= INT32_MAX && start[size] <= INT32_MAX, all_ok = 0;
+  MPI_Allreduce(&ok, &all_ok, 1, MPI_INT, MPI_MIN, comm);
+  if (!all_ok) throw Error("directory lookup: more than 2^31 ids on one rank; use more ranks");
+  std::vector<GlobalId> asked(static_cast<std::size_t>(rtot));
+  MPI_Alltoallv(ask.data(), scount.data(), sdisp.data(), MPI_INT64_T, asked.data(), rcount.data(), rdisp.data(),
+                MPI_INT64_T, comm);
+  release(ask);
+  std::vector<OwnerDirectory::Slot> answer(asked.size());
+  for (std::size_t k = 0; k < asked.size(); ++k) {
+    if (k + kAhead < asked.size()) dir.prefetch(asked[k + kAhead]);
+    answer[k] = dir.local(asked[k]);
+  }
+  release(asked);
+  std::vector<OwnerDirectory::Slot> got(static_cast<std::size_t>(start[size]));
+  MPI_Datatype slot_type;
+  MPI_Type_contiguous(2, MPI_INT32_T, &slot_type);
+  MPI_Type_commit(&slot_type);
+  MPI_Alltoallv(answer.data(), rcount.data(), rdisp.data(), slot_type, got.data(), scount.data(), sdisp.data(),
+                slot_type, comm);
+  MPI_Type_free(&slot_type);
+  release(answer);
+  for (std::size_t k = 0; k < half.size(); ++k)
+    if (!mine(half[k].b)) slot[k] = got[first[blocks.of(half[k].b)]++];
+  return slot;
+}
+
 // Step 1: every edge goes to the owners of both ends (once if they
-// coincide), with its `width` values and both ends' directory slots. Three
-// hops, none needing anything of size n: to the block holder of a (skipped
-// when every rank holds only edges with an end in its block, as the
-// problem's merged measurements are; that end is then a), which tags a's
-// owner; to the block holder of b, which tags b's and counts the cut; to the
-// owners. Edges are undirected: a and b may swap. Returns the local edge cut.
-// Consumes edges and edge_values (freed once the first records are built).
+// coincide), with its `width` values and both ends' directory slots. None of
+// it needs anything of size n: the records go to the block holder of a
+// (skipped when every rank holds only edges with an end in its block, as
+// the problem's merged measurements are; that end is then a), which tags a's
+// owner, asks the block holder of b for b's (slots_of_b), counts the cut and
+// sends them to the owners. Edges are undirected: a and b may swap. Returns
+// the local edge cut. Consumes edges and edge_values (freed once the first
+// records are built).
 GlobalId route_edges(MPI_Comm comm, const OwnerDirectory& dir, std::vector<GlobalId>&& edges,
                      std::vector<double>&& edge_values, int width, std::vector<EdgeRec>& mine,
                      std::vector<double>& mine_vals) {
@@ -294,35 +371,40 @@ GlobalId route_edges(MPI_Comm comm, const OwnerDirectory& dir, std::vector<Globa
     half[k].oa = s.owner;
     half[k].ia = s.index;
   }
-  std::vector<HalfTagged> at_b;
-  std::vector<double> at_b_vals;
-  send_records(comm, std::move(half), std::move(half_vals), width,
-               [&](std::size_t k) { return block_owner(n, size, half[k].b); }, at_b, at_b_vals);
-  // To the owner of a, and to the owner of b if it is another rank: the cut
-  // edges are counted first, so that their second copies go straight after
-  // the first ones (no reallocation of the whole array).
+  std::vector<OwnerDirectory::Slot> slot_b = slots_of_b(comm, dir, half);
+  // To the owner of a, and to the owner of b if it is another rank (a cut
+  // edge), packed straight into the send buffer in rank order.
+  std::vector<std::int64_t> start(static_cast<std::size_t>(size) + 1, 0);
   GlobalId cut = 0;
-  for (std::size_t k = 0; k < at_b.size(); ++k) {
-    if (k + kAhead < at_b.size()) dir.prefetch(at_b[k + kAhead].b);
-    cut += at_b[k].oa != dir.local(at_b[k].b).owner;
-  }
-  const std::size_t n_first = at_b.size();
-  std::vector<EdgeRec> full(n_first + static_cast<std::size_t>(cut));
-  at_b_vals.resize(full.size() * width);
-  for (std::size_t k = 0, d = n_first; k < n_first; ++k) {
-    if (k + kAhead < n_first) dir.prefetch(at_b[k + kAhead].b);
-    const auto& h = at_b[k];
-    const auto& s = dir.local(h.b);
-    full[k] = {h.a, h.b, h.oa, h.ia, s.owner, s.index};
-    if (h.oa != s.owner) {
-      full[d] = full[k];
-      std::copy(at_b_vals.begin() + k * width, at_b_vals.begin() + (k + 1) * width, at_b_vals.begin() + d * width);
-      ++d;
+  for (std::size_t k = 0; k < half.size(); ++k) {
+    ++start[half[k].oa + 1];
+    if (slot_b[k].owner != half[k].oa) {
+      ++start[slot_b[k].owner + 1];
+      ++cut;
     }
   }
-  release(at_b);
-  send_records(comm, std::move(full), std::move(at_b_vals), width,
-               [&](std::size_t k) { return k < n_first ? full[k].oa : full[k].ob; }, mine, mine_vals);
+  std::vector<int> scount, vcount(size);
+  pack_offsets(start, scount, width, "edge exchange");
+  for (int r = 0; r < size; ++r) vcount[r] = scount[r] * width;
+  std::vector<EdgeRec> sbuf(static_cast<std::size_t>(start[size]));
+  std::vector<double> svals(sbuf.size() * width);
+  auto put = [&](int r, const EdgeRec& e, const double* v) {
+    const auto pos = start[r]++;
+    sbuf[pos] = e;
+    std::copy(v, v + width, svals.begin() + pos * width);
+  };
+  for (std::size_t k = 0; k < half.size(); ++k) {
+    const auto& h = half[k];
+    const auto& s = slot_b[k];
+    const EdgeRec e{h.a, h.b, h.oa, h.ia, s.owner, s.index};
+    put(h.oa, e, half_vals.data() + k * width);
+    if (s.owner != h.oa) put(s.owner, e, half_vals.data() + k * width);
+  }
+  release(half);
+  release(half_vals);
+  release(slot_b);
+  mine = exchange_packed(comm, std::move(sbuf), scount);
+  mine_vals = exchange_packed(comm, std::move(svals), vcount);
   return cut;
 }
 
@@ -461,9 +543,7 @@ OwnedLists neighbour_lists(const OwnerDirectory& dir, int rank, std::vector<Edge
 // boundary), each then sorted by degree within windows.
 void rcm_groups(const OwnedLists& L, std::vector<std::int64_t> (&group)[2]) {
   // Owned-index adjacency (-1 for ghosts) and group positions for the BFS.
-  std::vector<std::int64_t> nbrs(L.entries.size());
-  const int rank = L.rank;
-  for (std::size_t k = 0; k < L.entries.size(); ++k) nbrs[k] = L.nbr_owner(k) == rank ? L.nbr_index(k) : -1;
+  auto nbr = [&L](std::int64_t k) -> std::int64_t { return L.nbr_owner(k) == L.rank ? L.nbr_index(k) : -1; };
   std::vector<std::int64_t> pos(L.owned.size(), -1);
   std::vector<std::int64_t> seeds;
   for (int gi : {1, 0}) {  // the boundary first: its order seeds the interior's
@@ -472,8 +552,8 @@ void rcm_groups(const OwnedLists& L, std::vector<std::int64_t> (&group)[2]) {
     if (gi == 0)  // interior nodes next to the boundary, in the boundary's order
       for (auto b : group[1])
         for (auto k = L.cnt[b]; k < L.cnt[b + 1]; ++k)
-          if (nbrs[k] >= 0 && !L.boundary[nbrs[k]]) seeds.push_back(pos[nbrs[k]]);
-    grp = rcm_order(grp, L.cnt, nbrs, pos, seeds);
+          if (const std::int64_t u = nbr(k); u >= 0 && !L.boundary[u]) seeds.push_back(pos[u]);
+    grp = rcm_order(grp, L.cnt, nbr, pos, seeds);
     for (auto v : grp) pos[v] = -1;
     sort_degree_windows(grp, L.cnt);
   }
@@ -548,18 +628,26 @@ LocalIds number_nodes(const OwnedLists& L, const std::vector<std::int64_t>& orde
 void fill_csr(const OwnedLists& L, const std::vector<std::int64_t>& order, const LocalIds& ids,
               int rank, int width,
               std::vector<std::int64_t>& offsets, std::vector<LocalId>& adjacency, std::vector<double>& values) {
-  offsets.assign(L.owned.size() + 1, 0);
+  const std::size_t n = order.size();
+  offsets.assign(n + 1, 0);
   adjacency.resize(L.entries.size());
   values.resize(L.entries.size() * width);
-  std::int64_t pos = 0;
-  for (std::size_t l = 0; l < order.size(); ++l) {
-    const auto v = order[l];
+  for (std::size_t l = 0; l < n; ++l) {
+    if (l + 16 < n) __builtin_prefetch(&L.cnt[order[l + 16]]);
+    offsets[l + 1] = offsets[l] + (L.cnt[order[l] + 1] - L.cnt[order[l]]);
+  }
+  // The lists are read in their own (global) order and each node's block is
+  // written to its place in the local order: reading them in local order
+  // instead made order -> cnt -> entries a chain of dependent misses (at 10M
+  // on 2 ranks 3.9 s, three loads taking 75% of it). Stores do not wait.
+  constexpr std::size_t kAhead = 16;
+  for (std::size_t v = 0; v < n; ++v) {
+    if (v + kAhead < n) __builtin_prefetch(&offsets[ids.owned_to_local[v + kAhead]]);
+    std::int64_t pos = offsets[ids.owned_to_local[v]];
     for (auto k = L.cnt[v]; k < L.cnt[v + 1]; ++k, ++pos) {
-      const GlobalId g = L.entries[k].nbr;
-      adjacency[pos] = L.nbr_owner(k) == rank ? ids.owned_to_local[L.nbr_index(k)] : ids.ghost(g);
+      adjacency[pos] = L.nbr_owner(k) == rank ? ids.owned_to_local[L.nbr_index(k)] : ids.ghost(L.entries[k].nbr);
       for (int c = 0; c < width; ++c) values[pos * width + c] = L.vals[k * width + c];
     }
-    offsets[l + 1] = pos;
   }
 }
 

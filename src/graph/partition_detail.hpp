@@ -1,15 +1,40 @@
 #pragma once
 // Internal to the graph layer (not installed): the partition's graph on rank
-// 0, exposed for its test against the serial twin.
+// 0, exposed for its test against the serial twin; the id blocks.
 #include <mpi.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <vector>
 
 #include "snl/core/common.hpp"
+#include "snl/io/network.hpp"
 
 namespace snl::detail {
+
+// The blocks of node ids (block_range): block r holds [first[r], first[r + 1]).
+struct Blocks {
+  std::vector<GlobalId> first;
+  double per_node = 0;  // blocks per node: the guess of of()
+  Blocks(GlobalId n, int size) : first(static_cast<std::size_t>(size) + 1) {
+    for (int r = 0; r < size; ++r) {
+      GlobalId rb, re;
+      block_range(n, size, r, rb, re);
+      first[r] = rb;
+      first[r + 1] = re;
+    }
+    per_node = n > 0 ? static_cast<double>(size) / static_cast<double>(n) : 0.0;
+  }
+  int size() const { return static_cast<int>(first.size()) - 1; }
+  // The block of node v from a floating-point guess, without integer divisions.
+  int of(GlobalId v) const {
+    int r = std::min(size() - 1, static_cast<int>(static_cast<double>(v) * per_node));
+    while (v < first[r]) --r;
+    while (v >= first[r + 1]) ++r;
+    return r;
+  }
+};
 
 /// The undirected graph of every rank's edge pairs as CSR on rank 0 (xadj of
 /// n + 1 offsets, each row ascending, a pair's two half-edges in the rows of

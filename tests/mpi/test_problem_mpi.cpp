@@ -97,11 +97,12 @@ static void reference_root_csr(GlobalId n, const std::vector<GlobalId>& pairs, s
 // than nodes.
 TEST(Partition, RootGraphEqualsTheSerialTwin) {
   const int size = world_size(), rank = world_rank();
-  for (const GlobalId n : {GlobalId{1}, GlobalId{2}, GlobalId{97}}) {
+  // 5000 nodes: blocks of over 1024 rows, which block_rows buckets several rows at a time.
+  for (const GlobalId n : {GlobalId{1}, GlobalId{2}, GlobalId{97}, GlobalId{5000}}) {
     std::vector<GlobalId> pairs;
     std::uint64_t x = 12345;
     auto next = [&] { return x = x * 6364136223846793005ULL + 1442695040888963407ULL, (x >> 33); };
-    for (int k = 0; k < 300 && n > 1; ++k) {
+    for (int k = 0; k < (n > 1000 ? 40000 : 300) && n > 1; ++k) {
       const GlobalId a = static_cast<GlobalId>(next() % static_cast<std::uint64_t>(n * 3 / 4 + 1));
       GlobalId b = static_cast<GlobalId>(next() % static_cast<std::uint64_t>(n));
       if (b == a) b = (a + 1) % n;
