@@ -67,7 +67,7 @@ struct GroupGraph {
 
 template <class Nbr>
 GroupGraph group_graph(const std::vector<std::int64_t>& nodes, const std::vector<std::int64_t>& cnt, Nbr&& nbr,
-                       const std::vector<std::int64_t>& pos) {
+                       const std::vector<std::int32_t>& pos) {
   const std::size_t m = nodes.size();
   GroupGraph g;
   g.off.assign(m + 1, 0);
@@ -76,9 +76,13 @@ GroupGraph group_graph(const std::vector<std::int64_t>& nodes, const std::vector
     for (std::size_t t = 0; t < m; ++t) total += std::size_t(cnt[nodes[t] + 1] - cnt[nodes[t]]);
     g.adj.reserve(total);
   }
+  constexpr std::size_t kAhead = 4;  // nodes whose neighbours' positions are fetched ahead (random reads)
   for (std::size_t t = 0; t < m; ++t) {
+    if (t + kAhead < m)
+      for (auto k = cnt[nodes[t + kAhead]]; k < cnt[nodes[t + kAhead] + 1]; ++k)
+        if (const std::int64_t u = nbr(k); u >= 0) __builtin_prefetch(&pos[u]);
     for (auto k = cnt[nodes[t]]; k < cnt[nodes[t] + 1]; ++k)
-      if (const std::int64_t u = nbr(k); u >= 0 && pos[u] >= 0) g.adj.push_back(static_cast<std::int32_t>(pos[u]));
+      if (const std::int64_t u = nbr(k); u >= 0 && pos[u] >= 0) g.adj.push_back(pos[u]);
     g.off[t + 1] = static_cast<std::int64_t>(g.adj.size());
   }
   g.deg.resize(m);
@@ -192,7 +196,7 @@ class CuthillMcKee {
 // Deterministic: ties are broken by the order of `nodes` (global id order).
 template <class Nbr>
 std::vector<std::int64_t> rcm_order(const std::vector<std::int64_t>& nodes, const std::vector<std::int64_t>& cnt,
-                                    Nbr&& nbr, const std::vector<std::int64_t>& pos,
+                                    Nbr&& nbr, const std::vector<std::int32_t>& pos,
                                     const std::vector<std::int64_t>& seeds) {
   const GroupGraph g = group_graph(nodes, cnt, nbr, pos);
   const std::vector<std::int64_t> candidates = by_degree(g.deg);
@@ -544,11 +548,11 @@ OwnedLists neighbour_lists(const OwnerDirectory& dir, int rank, std::vector<Edge
 void rcm_groups(const OwnedLists& L, std::vector<std::int64_t> (&group)[2]) {
   // Owned-index adjacency (-1 for ghosts) and group positions for the BFS.
   auto nbr = [&L](std::int64_t k) -> std::int64_t { return L.nbr_owner(k) == L.rank ? L.nbr_index(k) : -1; };
-  std::vector<std::int64_t> pos(L.owned.size(), -1);
+  std::vector<std::int32_t> pos(L.owned.size(), -1);  // 32-bit: n_owned < 2^31 (neighbour_lists)
   std::vector<std::int64_t> seeds;
   for (int gi : {1, 0}) {  // the boundary first: its order seeds the interior's
     auto& grp = group[gi];
-    for (std::size_t t = 0; t < grp.size(); ++t) pos[grp[t]] = static_cast<std::int64_t>(t);
+    for (std::size_t t = 0; t < grp.size(); ++t) pos[grp[t]] = static_cast<std::int32_t>(t);
     if (gi == 0)  // interior nodes next to the boundary, in the boundary's order
       for (auto b : group[1])
         for (auto k = L.cnt[b]; k < L.cnt[b + 1]; ++k)
@@ -640,9 +644,12 @@ void fill_csr(const OwnedLists& L, const std::vector<std::int64_t>& order, const
   // written to its place in the local order: reading them in local order
   // instead made order -> cnt -> entries a chain of dependent misses (at 10M
   // on 2 ranks 3.9 s, three loads taking 75% of it). Stores do not wait.
-  constexpr std::size_t kAhead = 16;
+  constexpr std::size_t kAhead = 16, kIdsAhead = 4;
   for (std::size_t v = 0; v < n; ++v) {
     if (v + kAhead < n) __builtin_prefetch(&offsets[ids.owned_to_local[v + kAhead]]);
+    if (v + kIdsAhead < n)  // the neighbours' local ids, read at random
+      for (auto k = L.cnt[v + kIdsAhead]; k < L.cnt[v + kIdsAhead + 1]; ++k)
+        if (L.nbr_owner(k) == rank) __builtin_prefetch(&ids.owned_to_local[L.nbr_index(k)]);
     std::int64_t pos = offsets[ids.owned_to_local[v]];
     for (auto k = L.cnt[v]; k < L.cnt[v + 1]; ++k, ++pos) {
       adjacency[pos] = L.nbr_owner(k) == rank ? ids.owned_to_local[L.nbr_index(k)] : ids.ghost(L.entries[k].nbr);
