@@ -78,8 +78,10 @@ bool any_rank(MPI_Comm comm, bool mine) {
 // Step 1: merge duplicates. Every measurement goes to the block owner of one
 // of its two sensors, chosen by a hash of the pair, where all copies of the
 // pair meet; rep gets the counts. (The smaller id would load rank r with
-// (2(P - r) - 1)/P^2 of the pairs: rank 0 with twice the mean.)
-Measurements merge_measurements(MPI_Comm comm, const Network& slab, ProblemReport& rep) {
+// (2(P - r) - 1)/P^2 of the pairs: rank 0 with twice the mean.) With
+// `consumed` (the slab itself, when the caller gives it up), the slab's
+// sensor measurements are freed once packed, before the exchange.
+Measurements merge_measurements(MPI_Comm comm, const Network& slab, Network* consumed, ProblemReport& rep) {
   const int size = comm_size(comm);
   const GlobalId n = slab.num_sensors;
   Measurements m;
@@ -107,6 +109,12 @@ Measurements merge_measurements(MPI_Comm comm, const Network& slab, ProblemRepor
       if (a > b) std::swap(a, b);
       const double sg = slab.sensor_sigmas.empty() ? 0.0 : slab.sensor_sigmas[e];
       sbuf[static_cast<std::size_t>(start[dest(e)]++)] = {a, b, slab.sensor_ranges[e], sg};
+    }
+    if (consumed) {  // at 10M on 2 ranks 0.96 GB per rank less at the exchange's peak
+      release(consumed->sensor_edges);
+      release(consumed->sensor_ranges);
+      release(consumed->sensor_sigmas);
+      release(consumed->sensor_nlos);
     }
     const std::vector<SensorEdgeRec> got = exchange_packed(comm, std::move(sbuf), scount);
     test_fail_point("alloc");  // fault-injection tests: one rank runs out of memory between collectives
@@ -249,12 +257,8 @@ void LocalizationProblem::build(MPI_Comm comm, const Network& slab, Network* con
   const GlobalId n = slab.num_sensors;
   ProblemReport rep;
   SetupClock clock(rep.setup_phases);
-  Measurements m = merge_measurements(comm, slab, rep);
+  Measurements m = merge_measurements(comm, slab, consumed, rep);
   if (consumed) {  // the merged lists hold them now; the truth and flags rows are still to come
-    release(consumed->sensor_edges);
-    release(consumed->sensor_ranges);
-    release(consumed->sensor_sigmas);
-    release(consumed->sensor_nlos);
     release(consumed->anchor_edges);
     release(consumed->anchor_ranges);
     release(consumed->anchor_sigmas);
