@@ -233,69 +233,72 @@ class PhaseClock {
   double mark_;
 };
 
-// Moves records (with `width` values each) to the ranks dest(k) returns for
-// record k; returns what this rank received (rank order, then k order),
-// values alongside. Consumes recs and vals: they are packed straight into one
-// send buffer in rank order and freed before the exchange, so one copy of the
+// Moves records (with `width` values each) to the rank dest(k) returns for
+// record k, and also to also(k) where that is another rank (-1: none);
+// returns what this rank received (rank order, then k order), values
+// alongside. Consumes recs and vals: they are packed straight into one send
+// buffer in rank order and freed before the exchange, so one copy of the
 // edges is in flight per hop (at 10M on 2 ranks per-destination vectors plus
-// exchange_records's packing held four).
-template <class Rec, class Dest>
+// exchange_records's packing held four). dest and also are called twice per
+// record (count, then pack): they must be cheap.
+template <class Rec, class Dest, class Also>
 void send_records(MPI_Comm comm, std::vector<Rec>&& recs, std::vector<double>&& vals, int width, Dest&& dest,
-                  std::vector<Rec>& got, std::vector<double>& got_vals) {
+                  Also&& also, std::vector<Rec>& got, std::vector<double>& got_vals) {
   const int size = comm_size(comm);
-  std::vector<std::int32_t> to(recs.size());
   std::vector<std::int64_t> start(static_cast<std::size_t>(size) + 1, 0);
   for (std::size_t k = 0; k < recs.size(); ++k) {
-    to[k] = dest(k);
-    ++start[to[k] + 1];
+    const int r = dest(k), r2 = also(k);
+    ++start[r + 1];
+    if (r2 >= 0 && r2 != r) ++start[r2 + 1];
   }
   std::vector<int> scount, vcount(size);
   pack_offsets(start, scount, width, "edge exchange");
   for (int r = 0; r < size; ++r) vcount[r] = scount[r] * width;
-  std::vector<Rec> sbuf(recs.size());
-  std::vector<double> svals(vals.size());
-  for (std::size_t k = 0; k < recs.size(); ++k) {
-    const auto pos = start[to[k]]++;
+  std::vector<Rec> sbuf(static_cast<std::size_t>(start[size]));
+  std::vector<double> svals(sbuf.size() * width);
+  auto put = [&](int r, std::size_t k) {
+    const auto pos = start[r]++;
     sbuf[pos] = recs[k];
     std::copy(vals.begin() + k * width, vals.begin() + (k + 1) * width, svals.begin() + pos * width);
+  };
+  for (std::size_t k = 0; k < recs.size(); ++k) {
+    const int r = dest(k), r2 = also(k);
+    put(r, k);
+    if (r2 >= 0 && r2 != r) put(r2, k);
   }
   release(recs);
   release(vals);
-  release(to);
   got = exchange_packed(comm, std::move(sbuf), scount);
   got_vals = exchange_packed(comm, std::move(svals), vcount);
 }
 
-struct HalfTagged {
-  GlobalId a, b;
-  std::int32_t oa, ia;
-};
-
-// The directory slot of each record's b, in record order: looked up here
-// when b is in this rank's block, else asked of its block holder (the ids
-// out and the slots back, 16 bytes per edge, where moving the records to the
-// block holder and on from there moved 32 + 8 width bytes and allocated a
-// second copy of them). Collective.
-std::vector<OwnerDirectory::Slot> slots_of_b(MPI_Comm comm, const OwnerDirectory& dir,
-                                             const std::vector<HalfTagged>& half) {
-  const int size = comm_size(comm), rank = comm_rank(comm);
+// Tags each record's b with its directory slot (ob, ib): looked up here when
+// b is in this rank's block, else asked of its block holder (the ids out and
+// the slots back, 16 bytes per edge, where moving the records to the block
+// holder and on from there moved 32 + 8 width bytes and allocated a second
+// copy of them). Collective.
+void tag_b(MPI_Comm comm, const OwnerDirectory& dir, std::vector<EdgeRec>& recs) {
+  const int size = comm_size(comm);
   const detail::Blocks blocks(dir.num_global(), size);
-  std::vector<OwnerDirectory::Slot> slot(half.size());
+  auto mine = [&](GlobalId g) { return g >= dir.block_begin() && g < dir.block_end(); };
   std::vector<std::int64_t> start(static_cast<std::size_t>(size) + 1, 0);
-  for (const auto& h : half) {
-    const int r = blocks.of(h.b);
-    if (r != rank) ++start[r + 1];
-  }
+  for (const auto& e : recs)
+    if (!mine(e.b)) ++start[blocks.of(e.b) + 1];
   std::vector<int> scount;
   pack_offsets(start, scount, 1, "directory lookup");
   std::vector<std::int64_t> first(start.begin(), start.end() - 1);
   std::vector<GlobalId> ask(static_cast<std::size_t>(start[size]));
   constexpr std::size_t kAhead = 16;  // directory lookups in flight (OwnerDirectory::prefetch)
-  auto mine = [&](GlobalId g) { return g >= dir.block_begin() && g < dir.block_end(); };
-  for (std::size_t k = 0; k < half.size(); ++k) {
-    if (k + kAhead < half.size() && mine(half[k + kAhead].b)) dir.prefetch(half[k + kAhead].b);
-    if (mine(half[k].b)) slot[k] = dir.local(half[k].b);
-    else ask[start[blocks.of(half[k].b)]++] = half[k].b;
+  for (std::size_t k = 0; k < recs.size(); ++k) {
+    if (k + kAhead < recs.size() && mine(recs[k + kAhead].b)) dir.prefetch(recs[k + kAhead].b);
+    auto& e = recs[k];
+    if (!mine(e.b)) {
+      ask[start[blocks.of(e.b)]++] = e.b;
+      continue;
+    }
+    const auto& s = dir.local(e.b);
+    e.ob = s.owner;
+    e.ib = s.index;
   }
   // The questions to their block holders, the answers back in the same order.
   std::vector<int> rcount(size), sdisp(size), rdisp(size);
@@ -327,9 +330,12 @@ std::vector<OwnerDirectory::Slot> slots_of_b(MPI_Comm comm, const OwnerDirectory
                 slot_type, comm);
   MPI_Type_free(&slot_type);
   release(answer);
-  for (std::size_t k = 0; k < half.size(); ++k)
-    if (!mine(half[k].b)) slot[k] = got[first[blocks.of(half[k].b)]++];
-  return slot;
+  for (auto& e : recs)
+    if (!mine(e.b)) {
+      const auto& s = got[first[blocks.of(e.b)]++];
+      e.ob = s.owner;
+      e.ib = s.index;
+    }
 }
 
 // Step 1: every edge goes to the owners of both ends (once if they
@@ -337,78 +343,49 @@ std::vector<OwnerDirectory::Slot> slots_of_b(MPI_Comm comm, const OwnerDirectory
 // it needs anything of size n: the records go to the block holder of a
 // (skipped when every rank holds only edges with an end in its block, as
 // the problem's merged measurements are; that end is then a), which tags a's
-// owner, asks the block holder of b for b's (slots_of_b), counts the cut and
+// owner, asks the block holder of b for b's (tag_b), counts the cut and
 // sends them to the owners. Edges are undirected: a and b may swap. Returns
 // the local edge cut. Consumes edges and edge_values (freed once the first
 // records are built).
 GlobalId route_edges(MPI_Comm comm, const OwnerDirectory& dir, std::vector<GlobalId>&& edges,
                      std::vector<double>&& edge_values, int width, std::vector<EdgeRec>& mine,
                      std::vector<double>& mine_vals) {
-  const int size = comm_size(comm);
-  const GlobalId n = dir.num_global();
-  std::vector<HalfTagged> half;
-  std::vector<double> half_vals;
+  const detail::Blocks blocks(dir.num_global(), comm_size(comm));
+  auto none = [](std::size_t) { return -1; };
+  std::vector<EdgeRec> recs;
+  std::vector<double> vals;
   {
     int local = 1, all = 0;
     auto in_block = [&](GlobalId g) { return g >= dir.block_begin() && g < dir.block_end(); };
     for (std::size_t k = 0; k < edges.size() && local; k += 2) local = in_block(edges[k]) || in_block(edges[k + 1]);
     MPI_Allreduce(&local, &all, 1, MPI_INT, MPI_MIN, comm);
-    std::vector<HalfTagged> pairs(edges.size() / 2);
+    std::vector<EdgeRec> pairs(edges.size() / 2);
     std::vector<double> pair_vals = std::move(edge_values);
     for (std::size_t e = 0; e < pairs.size(); ++e) {
       const bool swap = all && !in_block(edges[2 * e]);
-      pairs[e] = {edges[2 * e + (swap ? 1 : 0)], edges[2 * e + (swap ? 0 : 1)], -1, -1};
+      pairs[e] = {edges[2 * e + (swap ? 1 : 0)], edges[2 * e + (swap ? 0 : 1)], -1, -1, -1, -1};
     }
     release(edges);
     if (all) {
-      half = std::move(pairs);
-      half_vals = std::move(pair_vals);
+      recs = std::move(pairs);
+      vals = std::move(pair_vals);
     } else {
       send_records(comm, std::move(pairs), std::move(pair_vals), width,
-                   [&](std::size_t k) { return block_owner(n, size, pairs[k].a); }, half, half_vals);
+                   [&](std::size_t k) { return blocks.of(pairs[k].a); }, none, recs, vals);
     }
   }
   constexpr std::size_t kAhead = 16;  // directory lookups in flight (OwnerDirectory::prefetch)
-  for (std::size_t k = 0; k < half.size(); ++k) {
-    if (k + kAhead < half.size()) dir.prefetch(half[k + kAhead].a);
-    const auto& s = dir.local(half[k].a);
-    half[k].oa = s.owner;
-    half[k].ia = s.index;
+  for (std::size_t k = 0; k < recs.size(); ++k) {
+    if (k + kAhead < recs.size()) dir.prefetch(recs[k + kAhead].a);
+    const auto& s = dir.local(recs[k].a);
+    recs[k].oa = s.owner;
+    recs[k].ia = s.index;
   }
-  std::vector<OwnerDirectory::Slot> slot_b = slots_of_b(comm, dir, half);
-  // To the owner of a, and to the owner of b if it is another rank (a cut
-  // edge), packed straight into the send buffer in rank order.
-  std::vector<std::int64_t> start(static_cast<std::size_t>(size) + 1, 0);
+  tag_b(comm, dir, recs);
   GlobalId cut = 0;
-  for (std::size_t k = 0; k < half.size(); ++k) {
-    ++start[half[k].oa + 1];
-    if (slot_b[k].owner != half[k].oa) {
-      ++start[slot_b[k].owner + 1];
-      ++cut;
-    }
-  }
-  std::vector<int> scount, vcount(size);
-  pack_offsets(start, scount, width, "edge exchange");
-  for (int r = 0; r < size; ++r) vcount[r] = scount[r] * width;
-  std::vector<EdgeRec> sbuf(static_cast<std::size_t>(start[size]));
-  std::vector<double> svals(sbuf.size() * width);
-  auto put = [&](int r, const EdgeRec& e, const double* v) {
-    const auto pos = start[r]++;
-    sbuf[pos] = e;
-    std::copy(v, v + width, svals.begin() + pos * width);
-  };
-  for (std::size_t k = 0; k < half.size(); ++k) {
-    const auto& h = half[k];
-    const auto& s = slot_b[k];
-    const EdgeRec e{h.a, h.b, h.oa, h.ia, s.owner, s.index};
-    put(h.oa, e, half_vals.data() + k * width);
-    if (s.owner != h.oa) put(s.owner, e, half_vals.data() + k * width);
-  }
-  release(half);
-  release(half_vals);
-  release(slot_b);
-  mine = exchange_packed(comm, std::move(sbuf), scount);
-  mine_vals = exchange_packed(comm, std::move(svals), vcount);
+  for (const auto& e : recs) cut += e.oa != e.ob;
+  send_records(comm, std::move(recs), std::move(vals), width, [&](std::size_t k) { return recs[k].oa; },
+               [&](std::size_t k) { return recs[k].ob; }, mine, mine_vals);
   return cut;
 }
 
