@@ -8,7 +8,6 @@
 
 #include "graph/partition_detail.hpp"
 #include "snl/core/mpi_util.hpp"
-#include "snl/io/network.hpp"
 
 namespace snl {
 
