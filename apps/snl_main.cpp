@@ -113,8 +113,8 @@ void add_solve(CLI::App& app, Commands& c) {
   s->add_option("--seed", c.solve.solver.seed, "seed of --init random and of the async activation clock")
       ->capture_default_str();
   s->add_option("--partition", c.solve.partition,
-                "auto|metis|bfs|parmetis|block (auto: bfs on one node up to 16M sensors, else parmetis; bfs: "
-                "breadth-first bisection on rank 0, faster than metis, with a larger cut)")
+                "auto|metis|bfs|parmetis|block (auto: bfs on one node, else parmetis; bfs: breadth-first "
+                "bisection by every rank on its block of the graph, faster than metis, with a larger cut)")
       ->capture_default_str();
   s->add_option("--history-every", c.solve.solver.history_every, "record history every K iterations (0: auto)")
       ->capture_default_str();

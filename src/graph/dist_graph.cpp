@@ -28,6 +28,20 @@ LocalOrdering default_local_ordering() {
 }
 
 namespace {
+// Copies one edge's `width` values. std::copy with a run-time count became a
+// call to memmove per edge (80M calls per rank at 10M sensors in the lists
+// alone); the usual one or two values are copied inline.
+inline void copy_values(const double* src, double* dst, int width) {
+  if (width == 1) {
+    dst[0] = src[0];
+  } else if (width == 2) {
+    dst[0] = src[0];
+    dst[1] = src[1];
+  } else {
+    std::memcpy(dst, src, sizeof(double) * static_cast<std::size_t>(width));
+  }
+}
+
 // An edge with the owner and owner-side index of both ends (OwnerDirectory::Slot).
 struct EdgeRec {
   GlobalId a, b;
@@ -258,7 +272,7 @@ void send_records(MPI_Comm comm, std::vector<Rec>&& recs, std::vector<double>&& 
   auto put = [&](int r, std::size_t k) {
     const auto pos = start[r]++;
     sbuf[pos] = recs[k];
-    std::copy(vals.begin() + k * width, vals.begin() + (k + 1) * width, svals.begin() + pos * width);
+    copy_values(vals.data() + k * width, svals.data() + pos * width, width);
   };
   for (std::size_t k = 0; k < recs.size(); ++k) {
     const int r = dest(k), r2 = also(k);
@@ -413,14 +427,14 @@ void sort_by_neighbour(OwnedLists& L, std::int64_t b, std::int64_t e, std::vecto
     for (std::int64_t i = b + 1; i < e; ++i) {
       if (!(ent[i].nbr < ent[i - 1].nbr)) continue;
       const Entry x = ent[i];
-      std::copy(val + i * w, val + (i + 1) * w, tmp.begin());
+      copy_values(val + i * w, tmp.data(), w);
       std::int64_t j = i;
       for (; j > b && x.nbr < ent[j - 1].nbr; --j) {
         ent[j] = ent[j - 1];
-        std::copy(val + (j - 1) * w, val + j * w, val + j * w);
+        copy_values(val + (j - 1) * w, val + j * w, w);
       }
       ent[j] = x;
-      std::copy(tmp.begin(), tmp.begin() + w, val + j * w);
+      copy_values(tmp.data(), val + j * w, w);
     }
     return;
   }
@@ -431,7 +445,7 @@ void sort_by_neighbour(OwnedLists& L, std::int64_t b, std::int64_t e, std::vecto
   std::vector<double> sv(perm.size() * w);
   for (std::size_t t = 0; t < perm.size(); ++t) {
     se[t] = ent[perm[t]];
-    std::copy(val + perm[t] * w, val + (perm[t] + 1) * w, sv.begin() + t * w);
+    copy_values(val + perm[t] * w, sv.data() + t * w, w);
   }
   std::copy(se.begin(), se.end(), ent + b);
   std::copy(sv.begin(), sv.end(), val + b * w);
@@ -475,7 +489,7 @@ OwnedLists neighbour_lists(const OwnerDirectory& dir, int rank, std::vector<Edge
       const auto p = fill[v >> shift]++;
       L.entries[p] = e;
       key[p] = v;
-      std::copy(src, src + width, L.vals.begin() + p * width);
+      copy_values(src, L.vals.data() + p * width, width);
     };
     for (std::size_t t = 0; t < mine.size(); ++t) {
       const auto& r = mine[t];
@@ -508,7 +522,7 @@ OwnedLists neighbour_lists(const OwnerDirectory& dir, int rank, std::vector<Edge
     for (std::int64_t p = 0; p < e - s; ++p) {
       const auto q = fill[b_key[p] - v0]++;
       L.entries[q] = b_ent[p];
-      std::copy(b_val.begin() + p * width, b_val.begin() + (p + 1) * width, L.vals.begin() + q * width);
+      copy_values(b_val.data() + p * width, L.vals.data() + q * width, width);
     }
     for (auto v = v0; v < v1; ++v) {
       sort_by_neighbour(L, L.cnt[v], L.cnt[v + 1], tmp, perm);
@@ -620,16 +634,22 @@ void fill_csr(const OwnedLists& L, const std::vector<std::int64_t>& order, const
   // written to its place in the local order: reading them in local order
   // instead made order -> cnt -> entries a chain of dependent misses (at 10M
   // on 2 ranks 3.9 s, three loads taking 75% of it). Stores do not wait.
-  constexpr std::size_t kAhead = 16, kIdsAhead = 4;
+  constexpr std::size_t kAhead = 16, kDestAhead = 8, kIdsAhead = 4;
   for (std::size_t v = 0; v < n; ++v) {
     if (v + kAhead < n) __builtin_prefetch(&offsets[ids.owned_to_local[v + kAhead]]);
+    if (v + kDestAhead < n) {  // the block's first lines, for writing: the stores otherwise stall on their misses
+      const std::int64_t p = offsets[ids.owned_to_local[v + kDestAhead]];
+      __builtin_prefetch(adjacency.data() + p, 1);
+      __builtin_prefetch(values.data() + p * width, 1);
+      __builtin_prefetch(values.data() + p * width + 8, 1);
+    }
     if (v + kIdsAhead < n)  // the neighbours' local ids, read at random
       for (auto k = L.cnt[v + kIdsAhead]; k < L.cnt[v + kIdsAhead + 1]; ++k)
         if (L.nbr_owner(k) == rank) __builtin_prefetch(&ids.owned_to_local[L.nbr_index(k)]);
     std::int64_t pos = offsets[ids.owned_to_local[v]];
     for (auto k = L.cnt[v]; k < L.cnt[v + 1]; ++k, ++pos) {
       adjacency[pos] = L.nbr_owner(k) == rank ? ids.owned_to_local[L.nbr_index(k)] : ids.ghost(L.entries[k].nbr);
-      for (int c = 0; c < width; ++c) values[pos * width + c] = L.vals[k * width + c];
+      copy_values(L.vals.data() + k * width, values.data() + pos * width, width);
     }
   }
 }

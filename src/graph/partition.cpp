@@ -4,6 +4,7 @@
 #include <metis.h>
 
 #include <algorithm>
+#include <functional>
 #include <limits>
 #include <numeric>
 
@@ -49,11 +50,10 @@ int count_nodes(MPI_Comm comm) {
 }
 }  // namespace
 
-PartitionMethod resolve_partition_method(MPI_Comm comm, GlobalId n, PartitionMethod method) {
+PartitionMethod resolve_partition_method(MPI_Comm comm, GlobalId /*n*/, PartitionMethod method) {
   if (method != PartitionMethod::kAuto) return method;
   if (!parmetis_available()) return PartitionMethod::kBfs;
-  const bool big = n > kAutoParMetisNodes;
-  return (big || count_nodes(comm) > 1) ? PartitionMethod::kParMetis : PartitionMethod::kBfs;
+  return count_nodes(comm) > 1 ? PartitionMethod::kParMetis : PartitionMethod::kBfs;
 }
 
 // ---- Breadth-first level-structure partition ----
@@ -287,7 +287,8 @@ std::string route_halves(MPI_Comm comm, const Blocks& blocks, const std::vector<
 }
 
 // root_csr, step 2: the rows of this rank's block of nb nodes: counted,
-// filled, each sorted. Two levels, as DistGraph's neighbour lists: the
+// filled, each sorted where `sorted` (the bfs partition on every rank does
+// not depend on the order in a row). Two levels, as DistGraph's neighbour lists: the
 // half-edges go into buckets of consecutive rows (few write streams), then
 // each bucket's rows are counted and filled in cache (counting and filling
 // straight into the block's rows waited on a cache miss per half-edge: 1.2 s
@@ -295,7 +296,7 @@ std::string route_halves(MPI_Comm comm, const Blocks& blocks, const std::vector<
 // of memory.
 template <class Offset, class Index>
 bool block_rows(std::int64_t nb, std::vector<HalfRow<Index>>&& keep, std::vector<HalfRow<Index>>&& got,
-                std::vector<Offset>& lx, std::vector<Index>& ladj, std::int64_t& bytes) {
+                std::vector<Offset>& lx, std::vector<Index>& ladj, std::int64_t& bytes, bool sorted = true) {
   constexpr std::int64_t kBuckets = 1024;
   bool ok = true;
   try {
@@ -334,7 +335,7 @@ bool block_rows(std::int64_t nb, std::vector<HalfRow<Index>>&& keep, std::vector
   }
   release(keep);
   release(got);
-  for (std::int64_t v = 0; v < nb && ok; ++v) std::sort(ladj.begin() + lx[v], ladj.begin() + lx[v + 1]);
+  for (std::int64_t v = 0; v < nb && ok && sorted; ++v) std::sort(ladj.begin() + lx[v], ladj.begin() + lx[v + 1]);
   return ok;
 }
 
@@ -584,6 +585,51 @@ std::string parmetis_partition(MPI_Comm comm, GlobalId n, const std::vector<Glob
 }
 #endif
 
+// detail::bfs_blocks with neighbour ids of type Index.
+template <class Index>
+std::string bfs_blocks_impl(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, int nparts,
+                            std::int64_t max_levels, std::vector<int>& block, std::int64_t& peak,
+                            const std::function<void(const char*)>& mark) {
+  const Blocks blocks(n, comm_size(comm));
+  const int rank = comm_rank(comm);
+  const std::int64_t nb = blocks.first[rank + 1] - blocks.first[rank];
+  if (!all_ranks(comm, nb < std::numeric_limits<std::int32_t>::max()))
+    return "graph too large for the bfs partition on this many ranks (2^31 nodes per rank)";
+  std::vector<HalfRow<Index>> keep, got;
+  std::int64_t routed = 0, rows = 0, bytes = 0;
+  std::string why = route_halves(comm, blocks, edges, keep, got, routed);
+  if (!why.empty()) return why;
+  std::vector<std::int64_t> lx;
+  std::vector<Index> ladj;
+  if (!all_ranks(comm, block_rows(nb, std::move(keep), std::move(got), lx, ladj, rows, false)))
+    return "out of memory building the partition's graph";
+  if (mark) mark("bfs_graph");
+  const bool ok = detail::level_bisection(comm, blocks, lx, ladj, nparts, max_levels, block, bytes);
+  peak = std::max({peak, routed, rows,
+                   bytes + static_cast<std::int64_t>(lx.capacity() * 8 + ladj.capacity() * sizeof(Index))});
+  if (!ok) return detail::kPastMaxLevels;
+  if (mark) mark("bfs");
+  return "";
+}
+
+// The bfs partition by every rank; on a graph whose breadth-first passes run
+// past default_max_levels (long chains) the one on rank 0, which walks them
+// without a collective per level.
+std::string bfs_partition_blocks(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges,
+                                 std::vector<int>& block, PhaseMarks& phase, std::int64_t& peak, std::string& note) {
+  const std::int64_t max_levels = detail::default_max_levels(n);
+  std::string why =
+      detail::bfs_blocks(comm, n, edges, comm_size(comm), max_levels, block, peak, [&](const char* s) { phase(s); });
+  if (why != detail::kPastMaxLevels) return why;
+  note = "the bfs partition ran on rank 0 (a breadth-first pass of over " + std::to_string(max_levels) + " levels)";
+  phase("bfs_abandoned");  // one phase for the abandoned attempt: its rows and its passes
+  auto& ph = phase.phases;
+  if (ph.size() >= 2 && ph[ph.size() - 2].first == "bfs_graph") {
+    ph[ph.size() - 2] = {"bfs_abandoned", ph[ph.size() - 2].second + ph.back().second};
+    ph.pop_back();
+  }
+  return partition_on_root(comm, n, edges, PartitionMethod::kBfs, block, phase, peak);
+}
 // Imbalance of the partition into stats (collective).
 void partition_imbalance(const OwnerDirectory& dir, PartitionStats& stats) {
   const std::vector<GlobalId> counts = dir.counts();
@@ -598,9 +644,12 @@ std::vector<int> block_owners(MPI_Comm comm, GlobalId n, const std::vector<Globa
   const int size = comm_size(comm);
   std::vector<int> block;
   std::string why;
-  if ((method == PartitionMethod::kMetis || method == PartitionMethod::kBfs) && size > 1) {
+  if (method == PartitionMethod::kBfs && size > 1) {
+    why = bfs_partition_blocks(comm, n, edges, block, phase, peak, note);
+    if (why.empty()) used = "bfs";
+  } else if (method == PartitionMethod::kMetis && size > 1) {
     why = partition_on_root(comm, n, edges, method, block, phase, peak);
-    if (why.empty()) used = method == PartitionMethod::kBfs ? "bfs" : "metis";
+    if (why.empty()) used = "metis";
   } else if (method == PartitionMethod::kParMetis && size > 1) {
 #ifdef SNL_HAVE_PARMETIS
     // PT-Scotch needs vertices on every rank: tiny graphs go to METIS.
@@ -624,6 +673,14 @@ std::vector<int> block_owners(MPI_Comm comm, GlobalId n, const std::vector<Globa
 }
 
 }  // namespace
+
+std::string detail::bfs_blocks(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, int nparts,
+                               std::int64_t max_levels, std::vector<int>& block, std::int64_t& peak,
+                               const std::function<void(const char*)>& mark) {
+  if (n <= std::numeric_limits<std::int32_t>::max())
+    return bfs_blocks_impl<std::int32_t>(comm, n, edges, nparts, max_levels, block, peak, mark);
+  return bfs_blocks_impl<GlobalId>(comm, n, edges, nparts, max_levels, block, peak, mark);
+}
 
 std::string detail::root_csr(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges,
                              std::vector<std::int64_t>& xadj, std::vector<std::int32_t>& adjncy, std::int64_t& peak) {

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -43,5 +44,27 @@ struct Blocks {
 /// xadj and adjncy are left empty. peak: this rank's bytes at their largest.
 std::string root_csr(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, std::vector<std::int64_t>& xadj,
                      std::vector<std::int32_t>& adjncy, std::int64_t& peak);
+
+/// Owners of this rank's block of nodes under the bfs partition into nparts
+/// parts (src/graph/level_bisection.cpp) of the graph of every rank's edge
+/// pairs, computed by all ranks on their blocks of rows. Collective; returns
+/// "" on success, kPastMaxLevels when a breadth-first pass ran past
+/// max_levels levels (one collective round each), else why not; the same on
+/// every rank. mark(name) is called after the rows are built and at the end.
+inline const std::string kPastMaxLevels = "past the level limit";
+std::string bfs_blocks(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, int nparts,
+                       std::int64_t max_levels, std::vector<int>& block, std::int64_t& peak,
+                       const std::function<void(const char*)>& mark = {});
+
+/// The breadth-first passes allowed: 2^14 levels, or 4 sqrt(n) (a planar
+/// geometric graph's diameter in hops grows as sqrt(n)).
+std::int64_t default_max_levels(GlobalId n);
+
+/// The bfs partition over this rank's rows of blocks (lx: nb + 1 offsets,
+/// ladj: neighbour ids); false when a pass ran past max_levels.
+template <class Index>
+bool level_bisection(MPI_Comm comm, const Blocks& blocks, const std::vector<std::int64_t>& lx,
+                     const std::vector<Index>& ladj, int nparts, std::int64_t max_levels, std::vector<int>& owner,
+                     std::int64_t& bytes);
 
 }  // namespace snl::detail

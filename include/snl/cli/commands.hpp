@@ -42,7 +42,7 @@ struct SolveCommand {
   std::string output;
   std::string init = "random";  ///< "random" or a file with dataset `positions`
   std::string json;
-  std::string partition = "auto";  ///< bfs on one node below kAutoParMetisNodes, else parmetis
+  std::string partition = "auto";  ///< bfs on one node, parmetis across nodes
   SolverOptions solver;
   std::string checkpoint;               ///< --checkpoint CKPT.h5
   std::int64_t checkpoint_every = 0;    ///< --checkpoint-every K (iterations)
@@ -92,7 +92,7 @@ struct ExperimentCommand {
   std::string start = "relaxation";  ///< methods start from the relaxation's output, or from random
   double tol = 0;                 ///< methods' relative-improvement tolerance (0: spend the whole budget)
   std::uint64_t seed = 1;
-  std::string partition = "auto";  ///< bfs on one node below kAutoParMetisNodes, else parmetis
+  std::string partition = "auto";  ///< bfs on one node, parmetis across nodes
   bool quiet = false;
 };
 /// Monte Carlo study over noise draws (issue: experiment driver). Collective.

@@ -21,18 +21,19 @@ PartitionMethod parse_partition_method(const std::string& s);
 /// Whether this build has the ParMETIS interface (PT-Scotch's) for kParMetis.
 bool parmetis_available();
 /// kAuto by the measured rule (docs/performance.md, "Parallel setup", "The
-/// bfs partition"): parmetis when the ranks span more than one node or the
-/// graph has more than kAutoParMetisNodes nodes (and the build has it), else
-/// bfs. On one node METIS set up 1M and 10M sensors faster than PT-Scotch on
-/// 1, 2 and 4 ranks in every run, and bfs partitioned them 2.5-4 times faster
-/// than METIS with iterations as fast (its larger cut costs a shared-memory
-/// copy); above 16M (not measured: rank 0 would hold a gathered graph of
-/// 3.2 GB at degree 16) ParMETIS spreads it.
+/// bfs partition"): parmetis when the ranks span more than one node (and the
+/// build has it), else bfs. On one node METIS set up 1M and 10M sensors
+/// faster than PT-Scotch on 1, 2 and 4 ranks in every run, and bfs
+/// partitioned them 2.5-4 times faster than METIS with iterations as fast;
+/// the bfs partition runs on every rank's block of rows (nothing of size n on
+/// any rank), so no graph size sends it elsewhere. Across nodes it is not
+/// measured: each breadth-first level is a collective round.
 /// Collective (it counts the nodes). Other methods are returned unchanged.
-constexpr GlobalId kAutoParMetisNodes = 16000000;
 PartitionMethod resolve_partition_method(MPI_Comm comm, GlobalId n, PartitionMethod method);
 
-/// The bfs partition (on rank 0, like METIS): recursive bisection of the graph
+/// The bfs partition on one rank (`--partition bfs` runs it on rank 0 only
+/// where the distributed one, src/graph/level_bisection.cpp, would need over
+/// default_max_levels breadth-first levels): recursive bisection of the graph
 /// (CSR, rows ascending) by breadth-first order from a pseudo-peripheral node
 /// (George and Liu's level structures); each range of parts [p0, p1) gets its
 /// share of the nodes, sizes exact to one node; nodes of other components
