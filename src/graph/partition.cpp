@@ -618,18 +618,19 @@ std::string bfs_blocks_impl(MPI_Comm comm, GlobalId n, const std::vector<GlobalI
 std::string bfs_partition_blocks(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges,
                                  std::vector<int>& block, PhaseMarks& phase, std::int64_t& peak, std::string& note) {
   const std::int64_t max_levels = detail::default_max_levels(n);
-  std::string why =
-      detail::bfs_blocks(comm, n, edges, comm_size(comm), max_levels, block, peak, [&](const char* s) { phase(s); });
-  if (why != detail::kPastMaxLevels) return why;
-  note = "the bfs partition ran on rank 0 (a breadth-first pass of over " + std::to_string(max_levels) + " levels)";
-  phase("bfs_abandoned");  // one phase for the abandoned attempt: its rows and its passes
-  auto& ph = phase.phases;
-  if (ph.size() >= 2 && ph[ph.size() - 2].first == "bfs_graph") {
-    ph[ph.size() - 2] = {"bfs_abandoned", ph[ph.size() - 2].second + ph.back().second};
-    ph.pop_back();
+  PhaseMarks attempt;
+  const std::string why =
+      detail::bfs_blocks(comm, n, edges, comm_size(comm), max_levels, block, peak, [&](const char* s) { attempt(s); });
+  if (why != detail::kPastMaxLevels) {
+    phase.phases.insert(phase.phases.end(), attempt.phases.begin(), attempt.phases.end());
+    phase.mark = attempt.mark;
+    return why;
   }
+  note = "the bfs partition ran on rank 0 (a breadth-first pass of over " + std::to_string(max_levels) + " levels)";
+  phase("bfs_abandoned");  // the attempt, rows and passes, as one phase
   return partition_on_root(comm, n, edges, PartitionMethod::kBfs, block, phase, peak);
 }
+
 // Imbalance of the partition into stats (collective).
 void partition_imbalance(const OwnerDirectory& dir, PartitionStats& stats) {
   const std::vector<GlobalId> counts = dir.counts();
