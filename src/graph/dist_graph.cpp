@@ -37,7 +37,7 @@ inline void copy_values(const double* src, double* dst, int width) {
   } else if (width == 2) {
     dst[0] = src[0];
     dst[1] = src[1];
-  } else {
+  } else if (width > 2) {  // (none: memcpy's pointers may not be null, and a graph without values has none)
     std::memcpy(dst, src, sizeof(double) * static_cast<std::size_t>(width));
   }
 }
@@ -640,8 +640,10 @@ void fill_csr(const OwnedLists& L, const std::vector<std::int64_t>& order, const
     if (v + kDestAhead < n) {  // the block's first lines, for writing: the stores otherwise stall on their misses
       const std::int64_t p = offsets[ids.owned_to_local[v + kDestAhead]];
       __builtin_prefetch(adjacency.data() + p, 1);
-      __builtin_prefetch(values.data() + p * width, 1);
-      __builtin_prefetch(values.data() + p * width + 8, 1);
+      if (width > 0) {  // (no values: data() may be null, and no offset may be added to it)
+        __builtin_prefetch(values.data() + p * width, 1);
+        __builtin_prefetch(values.data() + p * width + 8, 1);
+      }
     }
     if (v + kIdsAhead < n)  // the neighbours' local ids, read at random
       for (auto k = L.cnt[v + kIdsAhead]; k < L.cnt[v + kIdsAhead + 1]; ++k)
