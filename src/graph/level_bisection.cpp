@@ -358,7 +358,8 @@ void LevelBisection<Index, Label>::select(const std::vector<std::int64_t>& need,
 // ranges, and the owners of the nodes whose range has one part. Where a
 // level boundary is within size / kLevelSlack of the proportional count, the
 // split is there instead: splitting a level by id leaves a random half of it
-// on each side (edge cut +10% at 10M sensors, +32% at 1M, on 2 ranks).
+// on each side (edge cut +15% at 10M sensors, +48% at 1M, on 2 ranks;
+// docs/design.md, "Partitioning").
 template <class Index, class Label>
 void LevelBisection<Index, Label>::split(const std::vector<std::int32_t>& base, std::vector<int>& owner) {
   const std::size_t nr = ranges_.size();
