@@ -103,16 +103,18 @@ GroupGraph group_graph(const std::vector<std::int64_t>& nodes, const std::vector
   return g;
 }
 
-// Positions by increasing degree, ties by position, i.e. by global id (a
-// counting sort: degrees are small, and it is stable): the BFS start candidates.
-std::vector<std::int64_t> by_degree(const std::vector<std::int32_t>& deg) {
+// Positions by increasing degree, ties in the order of `ties` (all
+// positions, by global id; a counting sort: degrees are small, and it is
+// stable): the BFS start candidates. Ties by global id, not by position,
+// keep the order independent of the owner-side indices' order.
+std::vector<std::int64_t> by_degree(const std::vector<std::int32_t>& deg, const std::vector<std::int64_t>& ties) {
   const std::size_t m = deg.size();
   std::vector<std::int64_t> by_deg(m);
   const std::int32_t max_deg = m ? *std::max_element(deg.begin(), deg.end()) : 0;
   std::vector<std::int64_t> start(static_cast<std::size_t>(max_deg) + 2, 0);
   for (std::size_t t = 0; t < m; ++t) ++start[deg[t] + 1];
   for (std::size_t d = 1; d < start.size(); ++d) start[d] += start[d - 1];
-  for (std::size_t t = 0; t < m; ++t) by_deg[start[deg[t]]++] = static_cast<std::int64_t>(t);
+  for (const std::int64_t t : ties) by_deg[start[deg[t]]++] = t;
   return by_deg;
 }
 
@@ -206,13 +208,15 @@ class CuthillMcKee {
 // boundary, so that after the reversal the interior runs from the nodes
 // farthest from the boundary to those next to it, in layers (temporal
 // blocking defers the chunks near the boundary: they are then contiguous).
-// Deterministic: ties are broken by the order of `nodes` (global id order).
+// Deterministic: `ties` lists the positions by global id (by_degree); the
+// sweeps break ties in list order, which is global-id order too. So the
+// order does not depend on the order of `nodes`, which only lays out memory.
 template <class Nbr>
 std::vector<std::int64_t> rcm_order(const std::vector<std::int64_t>& nodes, const std::vector<std::int64_t>& cnt,
                                     Nbr&& nbr, const std::vector<std::int32_t>& pos,
-                                    const std::vector<std::int64_t>& seeds) {
+                                    const std::vector<std::int64_t>& seeds, const std::vector<std::int64_t>& ties) {
   const GroupGraph g = group_graph(nodes, cnt, nbr, pos);
-  const std::vector<std::int64_t> candidates = by_degree(g.deg);
+  const std::vector<std::int64_t> candidates = by_degree(g.deg, ties);
   CuthillMcKee cm(g);
   for (std::int64_t t : seeds)
     if (!cm.seen(t)) cm.add_root(t);
@@ -403,9 +407,10 @@ GlobalId route_edges(MPI_Comm comm, const OwnerDirectory& dir, std::vector<Globa
 }
 
 // The owned nodes and their neighbour lists, indexed by position in `owned`
-// (global order = the directory's owner-side index), before the local numbering.
+// (the directory's owner-side index), before the local numbering.
 struct OwnedLists {
-  std::vector<GlobalId> owned;    // owned nodes in global order
+  std::vector<GlobalId> owned;    // owned nodes in owner-side index order
+  std::vector<std::int32_t> by_gid;  // their owner-side indices in ascending global id
   std::vector<std::int64_t> cnt;  // owned index v: entries [cnt[v], cnt[v + 1])
   std::vector<Entry> entries;     // per node sorted by neighbour global id
   std::vector<double> vals;       // `width` values per entry
@@ -451,7 +456,7 @@ void sort_by_neighbour(OwnedLists& L, std::int64_t b, std::int64_t e, std::vecto
   std::copy(sv.begin(), sv.end(), val + b * w);
 }
 
-// Step 2: the owned nodes in global order, then per-node neighbour lists
+// Step 2: the owned nodes in owner-side index order, then per-node neighbour lists
 // sorted by global id (the fixed summation order) from the received edges,
 // which it consumes. A two-level bucket sort by owner-side index: one
 // streaming pass scatters the half-edges into at most kBuckets buckets of
@@ -466,8 +471,7 @@ OwnedLists neighbour_lists(const OwnerDirectory& dir, int rank, std::vector<Edge
   OwnedLists L;
   L.rank = rank;
   L.width = width;
-  L.owned = dir.owned_nodes();
-  const auto n_owned = static_cast<std::int64_t>(L.owned.size());
+  const auto n_owned = static_cast<std::int64_t>(dir.counts()[static_cast<std::size_t>(rank)]);
   if (n_owned > static_cast<std::int64_t>(std::numeric_limits<LocalId>::max()))
     throw Error("too many sensors on one rank for 32-bit local ids; use more ranks");
   int shift = 0;
@@ -503,6 +507,8 @@ OwnedLists neighbour_lists(const OwnerDirectory& dir, int rank, std::vector<Edge
                                            L.vals.capacity() * sizeof(double) + bstart.capacity() * 16);
   release(mine);
   release(mine_vals);
+  // The owned nodes only now, in the records' freed memory, not on top of the peak.
+  L.owned = dir.owned_nodes(&L.by_gid);
   L.cnt.assign(static_cast<std::size_t>(n_owned) + 1, 0);
   L.boundary.assign(static_cast<std::size_t>(n_owned), 0);
   std::vector<Entry> b_ent;
@@ -539,26 +545,34 @@ void rcm_groups(const OwnedLists& L, std::vector<std::int64_t> (&group)[2]) {
   // Owned-index adjacency (-1 for ghosts) and group positions for the BFS.
   auto nbr = [&L](std::int64_t k) -> std::int64_t { return L.nbr_owner(k) == L.rank ? L.nbr_index(k) : -1; };
   std::vector<std::int32_t> pos(L.owned.size(), -1);  // 32-bit: n_owned < 2^31 (neighbour_lists)
-  std::vector<std::int64_t> seeds;
+  std::vector<std::int64_t> seeds, ties;
   for (int gi : {1, 0}) {  // the boundary first: its order seeds the interior's
     auto& grp = group[gi];
     for (std::size_t t = 0; t < grp.size(); ++t) pos[grp[t]] = static_cast<std::int32_t>(t);
+    ties.clear();
+    for (const std::int32_t v : L.by_gid)
+      if (pos[v] >= 0) ties.push_back(pos[v]);
     if (gi == 0)  // interior nodes next to the boundary, in the boundary's order
       for (auto b : group[1])
         for (auto k = L.cnt[b]; k < L.cnt[b + 1]; ++k)
           if (const std::int64_t u = nbr(k); u >= 0 && !L.boundary[u]) seeds.push_back(pos[u]);
-    grp = rcm_order(grp, L.cnt, nbr, pos, seeds);
+    grp = rcm_order(grp, L.cnt, nbr, pos, seeds, ties);
     for (auto v : grp) pos[v] = -1;
     sort_degree_windows(grp, L.cnt);
   }
 }
 
 // Step 3: owned indices in local order: interior, then boundary, each group
-// in RCM or global order. Sets n_interior.
+// in RCM (from owner-side index order: the bfs partition's bands keep its
+// scans near in memory) or global id order. Sets n_interior.
 std::vector<std::int64_t> local_order(const OwnedLists& L, LocalOrdering ordering, LocalId& n_interior) {
   std::vector<std::int64_t> group[2];
-  for (std::size_t v = 0; v < L.owned.size(); ++v) group[L.boundary[v] ? 1 : 0].push_back(static_cast<std::int64_t>(v));
-  if (ordering == LocalOrdering::kRcm) rcm_groups(L, group);
+  const bool rcm = ordering == LocalOrdering::kRcm;
+  for (std::size_t t = 0; t < L.owned.size(); ++t) {
+    const std::int64_t v = rcm ? static_cast<std::int64_t>(t) : L.by_gid[t];
+    group[L.boundary[v] ? 1 : 0].push_back(v);
+  }
+  if (rcm) rcm_groups(L, group);
   std::vector<std::int64_t> order = std::move(group[0]);
   n_interior = static_cast<LocalId>(order.size());
   order.insert(order.end(), group[1].begin(), group[1].end());
@@ -609,7 +623,7 @@ LocalIds number_nodes(const OwnedLists& L, const std::vector<std::int64_t>& orde
   }
   for (std::size_t t = 0; t < ghosts.size(); ++t) local_to_global[n_owned + t] = ghosts[t].g;
   owned_sorted.resize(n_owned);
-  for (std::size_t v = 0; v < n_owned; ++v) owned_sorted[v] = {L.owned[v], ids.owned_to_local[v]};
+  for (std::size_t t = 0; t < n_owned; ++t) owned_sorted[t] = {L.owned[L.by_gid[t]], ids.owned_to_local[L.by_gid[t]]};
   ids.ghost_sorted.resize(ghosts.size());
   for (std::size_t t = 0; t < ghosts.size(); ++t)
     ids.ghost_sorted[t] = {ghosts[t].g, static_cast<LocalId>(n_owned + t)};
@@ -731,7 +745,7 @@ DistGraph::DistGraph(MPI_Comm comm, const OwnerDirectory& owners, std::vector<Gl
   // The build's temporaries at their largest (edge records, lists, ghosts).
   build_peak_bytes_ = std::max<std::int64_t>(lists.peak_bytes, static_cast<std::int64_t>(
       lists.entries.capacity() * sizeof(Entry) + lists.vals.capacity() * sizeof(double) +
-      (lists.cnt.capacity() + lists.owned.capacity()) * 8 +
+      (lists.cnt.capacity() + lists.owned.capacity()) * 8 + lists.by_gid.capacity() * 4 +
       ghosts.capacity() * sizeof(Ghost) + ids.ghost_sorted.capacity() * sizeof(ids.ghost_sorted[0]) +
       ids.owned_to_local.capacity() * sizeof(LocalId) + order.capacity() * 8));
   halo_ = make_halo(gc, ghosts, lists, ids, halo_width);

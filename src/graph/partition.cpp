@@ -149,25 +149,52 @@ std::vector<int> bfs_partition(const std::vector<std::int64_t>& xadj, const std:
 
 // ---- OwnerDirectory ----
 
-OwnerDirectory::OwnerDirectory(MPI_Comm comm, GlobalId n, const std::vector<int>& owners) : comm_(comm), n_(n) {
+namespace {
+// Key histograms of more entries fall back to global-id order (keys ignored).
+constexpr long long kMaxKeyBins = 1LL << 22;
+}  // namespace
+
+OwnerDirectory::OwnerDirectory(MPI_Comm comm, GlobalId n, const std::vector<int>& owners,
+                               const std::vector<std::int32_t>& keys)
+    : comm_(comm), n_(n) {
   const MPI_Comm c = comm_.get();
   const int size = comm_size(c);
   GlobalId e;
   block_range(n, size, comm_rank(c), begin_, e);
-  if (static_cast<GlobalId>(owners.size()) != e - begin_) throw Error("internal error: owner block of wrong size");
-  // A node's index on its owner: the owner's nodes in lower blocks (an
-  // exclusive scan of the per-owner counts, O(P) per rank) plus its rank
-  // among the owner's nodes of this block.
-  std::vector<long long> cnt(size, 0), base(size, 0);
-  for (int o : owners) ++cnt[o];
-  MPI_Exscan(cnt.data(), base.data(), size, MPI_LONG_LONG, MPI_SUM, c);
+  if (static_cast<GlobalId>(owners.size()) != e - begin_ || (!keys.empty() && keys.size() != owners.size()))
+    throw Error("internal error: owner block of wrong size");
+  // Bins (owner, key) laid out owner by owner, keys 0..max of that owner;
+  // without keys one bin per owner.
+  std::vector<int> kmax(size, 0), kmax_all(size, 0);
+  for (std::size_t t = 0; t < keys.size(); ++t) kmax[owners[t]] = std::max(kmax[owners[t]], keys[t]);
+  MPI_Allreduce(kmax.data(), kmax_all.data(), size, MPI_INT, MPI_MAX, c);
+  std::vector<long long> first(static_cast<std::size_t>(size) + 1, 0);
+  for (int o = 0; o < size; ++o) first[o + 1] = first[o] + kmax_all[o] + 1;
+  const bool keyed = !keys.empty() && first[size] <= kMaxKeyBins;  // the same on every rank
+  if (!keyed)
+    for (int o = 0; o < size; ++o) first[o + 1] = o + 1;
+  auto bin = [&](std::size_t t) { return first[owners[t]] + (keyed ? keys[t] : 0); };
+  // A node's index on its owner: the owner's nodes of smaller keys (all
+  // blocks), of its key in lower blocks (an exclusive scan of the bins), and
+  // of its key before it in this block.
+  std::vector<long long> cnt(static_cast<std::size_t>(first[size]), 0), base(cnt.size(), 0), tot(cnt.size(), 0);
+  for (std::size_t t = 0; t < owners.size(); ++t) ++cnt[bin(t)];
+  MPI_Exscan(cnt.data(), base.data(), static_cast<int>(cnt.size()), MPI_LONG_LONG, MPI_SUM, c);
   if (comm_rank(c) == 0) std::fill(base.begin(), base.end(), 0);  // Exscan leaves rank 0's undefined
+  if (keyed) {
+    MPI_Allreduce(cnt.data(), tot.data(), static_cast<int>(cnt.size()), MPI_LONG_LONG, MPI_SUM, c);
+    for (int o = 0; o < size; ++o)
+      for (long long b = first[o], below = 0; b < first[o + 1]; ++b) {
+        base[b] += below;
+        below += tot[b];
+      }
+  }
   slots_.resize(owners.size());
   for (std::size_t t = 0; t < owners.size(); ++t) {
-    const int o = owners[t];
-    if (base[o] > std::numeric_limits<LocalId>::max())
+    const long long i = base[bin(t)]++;
+    if (i > std::numeric_limits<LocalId>::max())
       throw Error("too many sensors on one rank for 32-bit local ids; use more ranks");
-    slots_[t] = {o, static_cast<std::int32_t>(base[o]++)};
+    slots_[t] = {owners[t], static_cast<std::int32_t>(i)};
   }
 }
 
@@ -177,12 +204,28 @@ OwnerDirectory OwnerDirectory::from_dense(MPI_Comm comm, GlobalId n, const std::
   return OwnerDirectory(comm, n, std::vector<int>(owner.begin() + b, owner.begin() + e));
 }
 
-std::vector<GlobalId> OwnerDirectory::owned_nodes() const {
-  // Each block sends its nodes to their owners; blocks arrive in rank order,
-  // each ascending, so the concatenation is ascending (and slot index order).
-  std::vector<std::vector<GlobalId>> out(comm_size(comm_.get()));
-  for (std::size_t t = 0; t < slots_.size(); ++t) out[slots_[t].owner].push_back(begin_ + static_cast<GlobalId>(t));
-  return exchange_records(comm_.get(), out);
+std::vector<GlobalId> OwnerDirectory::owned_nodes(std::vector<std::int32_t>* by_gid) const {
+  // Each block sends its nodes' indices to their owners; blocks arrive in
+  // rank order, each ascending, so the concatenation is in global id order.
+  const MPI_Comm c = comm_.get();
+  const int size = comm_size(c);
+  std::vector<std::vector<std::int32_t>> out(size);
+  std::vector<std::vector<GlobalId>> gids(size);
+  {  // counted first: no reallocation
+    std::vector<std::size_t> cnt(size, 0);
+    for (const Slot& s : slots_) ++cnt[s.owner];
+    for (int r = 0; r < size; ++r) out[r].reserve(cnt[r]), gids[r].reserve(cnt[r]);
+  }
+  for (std::size_t t = 0; t < slots_.size(); ++t) {
+    out[slots_[t].owner].push_back(slots_[t].index);
+    gids[slots_[t].owner].push_back(begin_ + static_cast<GlobalId>(t));
+  }
+  std::vector<std::int32_t> index = exchange_records(c, out);
+  const std::vector<GlobalId> g = exchange_records(c, gids);
+  std::vector<GlobalId> owned(index.size());
+  for (std::size_t t = 0; t < g.size(); ++t) owned[static_cast<std::size_t>(index[t])] = g[t];
+  if (by_gid) *by_gid = std::move(index);
+  return owned;
 }
 
 std::vector<GlobalId> OwnerDirectory::counts() const {
@@ -589,7 +632,7 @@ std::string parmetis_partition(MPI_Comm comm, GlobalId n, const std::vector<Glob
 template <class Index>
 std::string bfs_blocks_impl(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, int nparts,
                             std::int64_t max_levels, std::vector<int>& block, std::int64_t& peak,
-                            const std::function<void(const char*)>& mark) {
+                            const std::function<void(const char*)>& mark, std::vector<std::int32_t>* keys) {
   const Blocks blocks(n, comm_size(comm));
   const int rank = comm_rank(comm);
   const std::int64_t nb = blocks.first[rank + 1] - blocks.first[rank];
@@ -604,7 +647,7 @@ std::string bfs_blocks_impl(MPI_Comm comm, GlobalId n, const std::vector<GlobalI
   if (!all_ranks(comm, block_rows(nb, std::move(keep), std::move(got), lx, ladj, rows, false)))
     return "out of memory building the partition's graph";
   if (mark) mark("bfs_graph");
-  const bool ok = detail::level_bisection(comm, blocks, lx, ladj, nparts, max_levels, block, bytes);
+  const bool ok = detail::level_bisection(comm, blocks, lx, ladj, nparts, max_levels, block, bytes, keys);
   peak = std::max({peak, routed, rows,
                    bytes + static_cast<std::int64_t>(lx.capacity() * 8 + ladj.capacity() * sizeof(Index))});
   if (!ok) return detail::kPastMaxLevels;
@@ -616,16 +659,18 @@ std::string bfs_blocks_impl(MPI_Comm comm, GlobalId n, const std::vector<GlobalI
 // past default_max_levels (long chains) the one on rank 0, which walks them
 // without a collective per level.
 std::string bfs_partition_blocks(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges,
-                                 std::vector<int>& block, PhaseMarks& phase, std::int64_t& peak, std::string& note) {
+                                 std::vector<int>& block, std::vector<std::int32_t>& keys, PhaseMarks& phase,
+                                 std::int64_t& peak, std::string& note) {
   const std::int64_t max_levels = detail::default_max_levels(n);
   PhaseMarks attempt;
-  const std::string why =
-      detail::bfs_blocks(comm, n, edges, comm_size(comm), max_levels, block, peak, [&](const char* s) { attempt(s); });
+  const std::string why = detail::bfs_blocks(comm, n, edges, comm_size(comm), max_levels, block, peak,
+                                             [&](const char* s) { attempt(s); }, &keys);
   if (why != detail::kPastMaxLevels) {
     phase.phases.insert(phase.phases.end(), attempt.phases.begin(), attempt.phases.end());
     phase.mark = attempt.mark;
     return why;
   }
+  keys.clear();
   note = "the bfs partition ran on rank 0 (a breadth-first pass of over " + std::to_string(max_levels) + " levels)";
   phase("bfs_abandoned");  // the attempt, rows and passes, as one phase
   return partition_on_root(comm, n, edges, PartitionMethod::kBfs, block, phase, peak);
@@ -638,15 +683,17 @@ void partition_imbalance(const OwnerDirectory& dir, PartitionStats& stats) {
   stats.imbalance = mean > 0 ? static_cast<double>(*std::max_element(counts.begin(), counts.end())) / mean : 1.0;
 }
 
-// Owners of this rank's block by `method` (one rank or a fallback: block).
+// Owners of this rank's block by `method` (one rank or a fallback: block),
+// and with the distributed bfs partition the nodes' keys (level_bisection).
 // Sets `used` and `note`.
 std::vector<int> block_owners(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, PartitionMethod method,
-                              PhaseMarks& phase, std::int64_t& peak, std::string& used, std::string& note) {
+                              std::vector<std::int32_t>& keys, PhaseMarks& phase, std::int64_t& peak,
+                              std::string& used, std::string& note) {
   const int size = comm_size(comm);
   std::vector<int> block;
   std::string why;
   if (method == PartitionMethod::kBfs && size > 1) {
-    why = bfs_partition_blocks(comm, n, edges, block, phase, peak, note);
+    why = bfs_partition_blocks(comm, n, edges, block, keys, phase, peak, note);
     if (why.empty()) used = "bfs";
   } else if (method == PartitionMethod::kMetis && size > 1) {
     why = partition_on_root(comm, n, edges, method, block, phase, peak);
@@ -666,6 +713,7 @@ std::vector<int> block_owners(MPI_Comm comm, GlobalId n, const std::vector<Globa
   }
   if (!why.empty()) note = why + "; used the block partition instead";
   if (!why.empty() || block.empty()) {
+    keys.clear();
     GlobalId b, e;
     block_range(n, size, comm_rank(comm), b, e);
     block.assign(static_cast<std::size_t>(e - b), comm_rank(comm));
@@ -677,10 +725,10 @@ std::vector<int> block_owners(MPI_Comm comm, GlobalId n, const std::vector<Globa
 
 std::string detail::bfs_blocks(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, int nparts,
                                std::int64_t max_levels, std::vector<int>& block, std::int64_t& peak,
-                               const std::function<void(const char*)>& mark) {
+                               const std::function<void(const char*)>& mark, std::vector<std::int32_t>* keys) {
   if (n <= std::numeric_limits<std::int32_t>::max())
-    return bfs_blocks_impl<std::int32_t>(comm, n, edges, nparts, max_levels, block, peak, mark);
-  return bfs_blocks_impl<GlobalId>(comm, n, edges, nparts, max_levels, block, peak, mark);
+    return bfs_blocks_impl<std::int32_t>(comm, n, edges, nparts, max_levels, block, peak, mark, keys);
+  return bfs_blocks_impl<GlobalId>(comm, n, edges, nparts, max_levels, block, peak, mark, keys);
 }
 
 std::string detail::root_csr(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges,
@@ -695,8 +743,9 @@ OwnerDirectory partition_nodes(MPI_Comm comm, GlobalId n, const std::vector<Glob
   method = resolve_partition_method(comm, n, method);
   std::string used = "block", note;
   std::int64_t peak = 0;
-  const std::vector<int> block = block_owners(comm, n, edges, method, phase, peak, used, note);
-  OwnerDirectory dir(comm, n, block);
+  std::vector<std::int32_t> keys;
+  const std::vector<int> block = block_owners(comm, n, edges, method, keys, phase, peak, used, note);
+  OwnerDirectory dir(comm, n, block, keys);
   if (stats) {
     stats->method = used;
     stats->note = note;

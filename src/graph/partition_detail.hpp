@@ -51,20 +51,24 @@ std::string root_csr(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edg
 /// "" on success, kPastMaxLevels when a breadth-first pass ran past
 /// max_levels levels (one collective round each), else why not; the same on
 /// every rank. mark(name) is called after the rows are built and at the end.
+/// keys: each node's key in the split that decided its part (level_bisection).
 inline const std::string kPastMaxLevels = "past the level limit";
 std::string bfs_blocks(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, int nparts,
                        std::int64_t max_levels, std::vector<int>& block, std::int64_t& peak,
-                       const std::function<void(const char*)>& mark = {});
+                       const std::function<void(const char*)>& mark = {}, std::vector<std::int32_t>* keys = nullptr);
 
 /// The breadth-first passes allowed: 2^14 levels, or 4 sqrt(n) (a planar
 /// geometric graph's diameter in hops grows as sqrt(n)).
 std::int64_t default_max_levels(GlobalId n);
 
 /// The bfs partition over this rank's rows of blocks (lx: nb + 1 offsets,
-/// ladj: neighbour ids); false when a pass ran past max_levels.
+/// ladj: neighbour ids); false when a pass ran past max_levels. With keys:
+/// each node's breadth-first distance from the root of the pass that decided
+/// its part (nodes of one part share that root: an order of the part in
+/// bands, OwnerDirectory's keyed index).
 template <class Index>
 bool level_bisection(MPI_Comm comm, const Blocks& blocks, const std::vector<std::int64_t>& lx,
                      const std::vector<Index>& ladj, int nparts, std::int64_t max_levels, std::vector<int>& owner,
-                     std::int64_t& bytes);
+                     std::int64_t& bytes, std::vector<std::int32_t>* keys = nullptr);
 
 }  // namespace snl::detail

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "graph/partition_detail.hpp"
+#include "snl/graph/dist_graph.hpp"
 #include "solve_helpers.hpp"
 
 using namespace snl;
@@ -94,9 +95,12 @@ std::map<int, int> distances(const Graph& g, int root, const std::set<int>& with
   return d;
 }
 
-void twin_split(const Graph& g, const std::vector<int>& nodes, int p0, int p1, std::vector<int>& owner) {
+// owner and, in keys, each node's key in the split that gave it its part
+// (parent: the keys of that split; none at the top: 0).
+void twin_split(const Graph& g, const std::vector<int>& nodes, int p0, int p1, std::vector<int>& owner,
+                std::vector<std::int64_t>& keys, const std::map<int, std::int64_t>* parent) {
   if (p1 - p0 == 1) {
-    for (int v : nodes) owner[v] = p0;
+    for (int v : nodes) owner[v] = p0, keys[v] = parent ? parent->at(v) : 0;
     return;
   }
   if (nodes.empty()) return;
@@ -134,37 +138,53 @@ void twin_split(const Graph& g, const std::vector<int>& nodes, int p0, int p1, s
     for (int v : order) lo += key[v] < k, up += key[v] <= k;
     if (need - lo <= slack || up - need <= slack) cut = need - lo <= up - need ? lo : up;
   }
-  twin_split(g, std::vector<int>(order.begin(), order.begin() + cut), p0, pm, owner);
-  twin_split(g, std::vector<int>(order.begin() + cut, order.end()), pm, p1, owner);
+  twin_split(g, std::vector<int>(order.begin(), order.begin() + cut), p0, pm, owner, keys, &key);
+  twin_split(g, std::vector<int>(order.begin() + cut, order.end()), pm, p1, owner, keys, &key);
 }
 
-std::vector<int> twin(const Graph& g, int nparts) {
+std::vector<int> twin(const Graph& g, int nparts, std::vector<std::int64_t>* keys = nullptr) {
   std::vector<int> nodes(g.n), owner(g.n, -1);
+  std::vector<std::int64_t> k(g.n, -1);
   std::iota(nodes.begin(), nodes.end(), 0);
-  twin_split(g, nodes, 0, nparts, owner);
+  twin_split(g, nodes, 0, nparts, owner, k, nullptr);
+  if (keys) *keys = k;
   return owner;
 }
 
-// bfs_blocks with the pairs dealt round robin; the owners of all nodes.
-std::string distributed(const Graph& g, int nparts, std::int64_t max_levels, std::vector<int>& owner) {
+// Every rank's block of v (block_range) gathered on every rank.
+template <class T>
+std::vector<T> gather_blocks(int n, const std::vector<T>& mine, MPI_Datatype type) {
+  const int size = world_size();
+  std::vector<int> counts(size), displs(size);
+  for (int r = 0; r < size; ++r) {
+    GlobalId b, e;
+    block_range(n, size, r, b, e);
+    counts[r] = static_cast<int>(e - b);
+    displs[r] = static_cast<int>(b);
+  }
+  std::vector<T> all(n);
+  MPI_Allgatherv(mine.data(), static_cast<int>(mine.size()), type, all.data(), counts.data(), displs.data(), type,
+                 MPI_COMM_WORLD);
+  return all;
+}
+
+// bfs_blocks with the pairs dealt round robin; the owners (and keys) of all nodes.
+std::string distributed(const Graph& g, int nparts, std::int64_t max_levels, std::vector<int>& owner,
+                        std::vector<std::int64_t>* keys = nullptr) {
   const int size = world_size(), rank = world_rank();
   std::vector<GlobalId> mine;
   for (std::size_t k = 0; k < g.pairs.size(); k += 2)
     if (static_cast<int>((k / 2) % size) == rank) mine.insert(mine.end(), {g.pairs[k], g.pairs[k + 1]});
   std::vector<int> block;
+  std::vector<std::int32_t> key;
   std::int64_t peak = 0;
-  const std::string why = detail::bfs_blocks(MPI_COMM_WORLD, g.n, mine, nparts, max_levels, block, peak);
-  std::vector<int> counts(size), displs(size);
-  for (int r = 0; r < size; ++r) {
-    GlobalId b, e;
-    block_range(g.n, size, r, b, e);
-    counts[r] = static_cast<int>(e - b);
-    displs[r] = static_cast<int>(b);
-  }
+  const std::string why = detail::bfs_blocks(MPI_COMM_WORLD, g.n, mine, nparts, max_levels, block, peak, {}, &key);
   if (why.empty()) {
-    owner.assign(g.n, -1);
-    MPI_Allgatherv(block.data(), static_cast<int>(block.size()), MPI_INT, owner.data(), counts.data(), displs.data(),
-                   MPI_INT, MPI_COMM_WORLD);
+    owner = gather_blocks(g.n, block, MPI_INT);
+    if (keys) {
+      const std::vector<std::int32_t> all = gather_blocks(g.n, key, MPI_INT32_T);
+      keys->assign(all.begin(), all.end());
+    }
   }
   return why;
 }
@@ -185,8 +205,10 @@ TEST(DistributedBfs, EqualsItsTwin) {
   for (const auto& [name, g] : graphs)
     for (const int np : {1, 2, 3, 4, 5, 8, 13}) {
       std::vector<int> owner;
-      ASSERT_EQ(distributed(g, np, 1 << 20, owner), "") << name;
-      EXPECT_EQ(owner, twin(g, np)) << name << ", " << np << " parts, rank " << world_rank();
+      std::vector<std::int64_t> keys, twin_keys;
+      ASSERT_EQ(distributed(g, np, 1 << 20, owner, &keys), "") << name;
+      EXPECT_EQ(owner, twin(g, np, &twin_keys)) << name << ", " << np << " parts, rank " << world_rank();
+      EXPECT_EQ(keys, twin_keys) << name << ", " << np << " parts, rank " << world_rank();
     }
 }
 
@@ -215,4 +237,86 @@ TEST(DistributedBfs, PastTheLevelLimitOnEveryRank) {
   EXPECT_EQ(distributed(g, 2, 20, owner), detail::kPastMaxLevels);
   EXPECT_EQ(distributed(g, 2, 200, owner), "");
   EXPECT_EQ(owner, twin(g, 2));
+}
+
+// The directory's index: each owner's nodes in (key, global id) order, the
+// same however the nodes are split into blocks; owned_nodes lists them in
+// index order and, by_gid, the indices in global id order. Keys too many
+// for the bins fall back to global id order.
+void check_directory(int n, const std::vector<int>& owner, const std::vector<std::int32_t>& key, bool keyed) {
+  const int size = world_size(), rank = world_rank();
+  GlobalId b, e;
+  block_range(n, size, rank, b, e);
+  const std::vector<int> mine_owner(owner.begin() + b, owner.begin() + e);
+  const std::vector<std::int32_t> mine_key =
+      key.empty() ? std::vector<std::int32_t>{} : std::vector<std::int32_t>(key.begin() + b, key.begin() + e);
+  const OwnerDirectory dir(MPI_COMM_WORLD, n, mine_owner, mine_key);
+  // The plain order: per owner, nodes sorted by (key, id) (or id).
+  std::vector<std::vector<GlobalId>> expect(size);
+  std::vector<int> ids(n);
+  std::iota(ids.begin(), ids.end(), 0);
+  std::stable_sort(ids.begin(), ids.end(), [&](int x, int y) { return keyed && key[x] < key[y]; });
+  for (int v : ids) expect[owner[v]].push_back(v);
+  for (GlobalId g = b; g < e; ++g) {
+    const auto& s = dir.local(g);
+    ASSERT_EQ(s.owner, owner[g]);
+    ASSERT_LT(s.index, static_cast<std::int32_t>(expect[s.owner].size()));
+    EXPECT_EQ(expect[s.owner][s.index], g) << "node " << g << " rank " << rank;
+  }
+  std::vector<std::int32_t> by_gid;
+  const std::vector<GlobalId> owned = dir.owned_nodes(&by_gid);
+  EXPECT_EQ(owned, expect[rank]) << "rank " << rank;
+  ASSERT_EQ(by_gid.size(), owned.size());
+  for (std::size_t t = 1; t < by_gid.size(); ++t) EXPECT_LT(owned[by_gid[t - 1]], owned[by_gid[t]]);
+}
+
+TEST(OwnerDirectory, IndexInKeyThenIdOrder) {
+  const int size = world_size(), n = 1000;
+  std::mt19937 rng(11);
+  std::vector<int> owner(n);
+  std::vector<std::int32_t> key(n), big(n);
+  for (int v = 0; v < n; ++v) {
+    owner[v] = static_cast<int>(rng() % static_cast<unsigned>(size));
+    key[v] = static_cast<std::int32_t>(rng() % 40);
+    big[v] = v == 500 ? (1 << 23) : key[v];  // more bins than the directory keeps
+  }
+  check_directory(n, owner, key, true);
+  check_directory(n, owner, {}, false);
+  check_directory(n, owner, std::vector<std::int32_t>(n, 0), false);
+  check_directory(n, owner, big, false);
+}
+
+// The graph build indexes its lists by the directory's index; the local
+// order (RCM) and the CSR must not depend on that index's order: the same
+// graph under keyed and unkeyed directories gives the same local numbering.
+TEST(OwnerDirectory, LocalOrderIndependentOfTheIndexOrder) {
+  const int size = world_size(), rank = world_rank();
+  const Graph g = geometric(900, 0.06, 12);
+  GlobalId b, e;
+  block_range(g.n, size, rank, b, e);
+  std::mt19937 rng(13);
+  std::vector<int> owner(g.n);
+  std::vector<std::int32_t> key(g.n);
+  for (int v = 0; v < g.n; ++v) {
+    owner[v] = static_cast<int>((v / 7) % size);
+    key[v] = static_cast<std::int32_t>(rng() % 50);
+  }
+  const std::vector<int> mine_owner(owner.begin() + b, owner.begin() + e);
+  const std::vector<std::int32_t> mine_key(key.begin() + b, key.begin() + e);
+  auto build = [&](const std::vector<std::int32_t>& keys) {
+    std::vector<GlobalId> edges;
+    std::vector<double> vals;
+    for (std::size_t k = 0; k < g.pairs.size(); k += 2)
+      if (static_cast<int>((k / 2) % size) == rank) {
+        edges.insert(edges.end(), {g.pairs[k], g.pairs[k + 1]});
+        vals.push_back(static_cast<double>(k));
+      }
+    return DistGraph(MPI_COMM_WORLD, OwnerDirectory(MPI_COMM_WORLD, g.n, mine_owner, keys), edges, vals, 1, 2);
+  };
+  const DistGraph plain = build({}), keyed = build(mine_key);
+  EXPECT_EQ(keyed.local_to_global(), plain.local_to_global()) << "rank " << rank;
+  EXPECT_EQ(keyed.num_interior(), plain.num_interior());
+  EXPECT_EQ(keyed.offsets(), plain.offsets());
+  EXPECT_EQ(keyed.adjacency(), plain.adjacency());
+  EXPECT_EQ(keyed.edge_values(), plain.edge_values());
 }

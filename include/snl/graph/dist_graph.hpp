@@ -61,16 +61,22 @@ struct PartitionStats {
 
 /// Distributed directory of node owners: rank r holds, for the global ids of
 /// its block (block_range(n, P, r)), each node's owner and its index among
-/// that owner's nodes in ascending global-id order. Nothing of size n on any
-/// rank; lookups are all-to-alls. Holds its own duplicate communicator.
+/// that owner's nodes, in ascending (key, global id) order (keys: all 0 when
+/// none are given). Nothing of size n on any rank; lookups are all-to-alls.
+/// Holds its own duplicate communicator.
 class OwnerDirectory {
  public:
   struct Slot {
     std::int32_t owner, index;
   };
   OwnerDirectory() = default;
-  /// Collective. `owners`: the owner rank of each node of this rank's block.
-  OwnerDirectory(MPI_Comm comm, GlobalId n, const std::vector<int>& owners);
+  /// Collective. `owners`: the owner rank of each node of this rank's block;
+  /// `keys` (empty, or one per node, >= 0): the order of the owner's indices.
+  /// The bfs partition's keys are breadth-first distances, so that a part's
+  /// indices run in bands and neighbours get nearby indices: the graph build
+  /// then walks nearby memory where global ids scatter it.
+  OwnerDirectory(MPI_Comm comm, GlobalId n, const std::vector<int>& owners,
+                 const std::vector<std::int32_t>& keys = {});
   /// Collective. From every node's owner, the same vector on every rank.
   static OwnerDirectory from_dense(MPI_Comm comm, GlobalId n, const std::vector<int>& owner);
   MPI_Comm comm() const { return comm_.get(); }
@@ -83,8 +89,9 @@ class OwnerDirectory {
   /// issue it a few records ahead so that lookups overlap (at 10M the slots
   /// are 40 MB per rank, beyond the caches).
   void prefetch(GlobalId g) const { __builtin_prefetch(slots_.data() + (g - begin_)); }
-  /// Collective: this rank's nodes in ascending global id (slot index order).
-  std::vector<GlobalId> owned_nodes() const;
+  /// Collective: this rank's nodes in slot index order; with by_gid, their
+  /// indices in ascending global id order.
+  std::vector<GlobalId> owned_nodes(std::vector<std::int32_t>* by_gid = nullptr) const;
   /// Collective: nodes per rank (on every rank).
   std::vector<GlobalId> counts() const;
   /// Collective: every node's owner on every rank (O(n): for callers that
