@@ -3,8 +3,9 @@
 # ...), so that a change of the setup code is measured against the code before
 # it on one machine at one time. Each run: snl solve NET --partition metis
 # --max-iter ITERS --tol 0 (ITERS: 1 unless set; the pipeline with --refine
-# mm, so that each phase runs ITERS iterations) on NP ranks; records its wall
-# time, load, the ms per iteration of each phase, the setup
+# REFINE, mm unless set, so that each phase runs ITERS iterations) on NP
+# ranks; records its wall time, load, the ms per iteration of each phase, the
+# read, solve and write times, the setup
 # phases of the solve JSON, its per-rank memory, and whether its positions
 # equal the first A run's on that network, byte for byte.
 #   A=old/bin/snl B=build/bin/snl NETS="n1m.h5 n10m.h5" NPS="1 2" REPS=2 \
@@ -50,7 +51,7 @@ for net in $NETS; do
         out="$WORK/r_${n}_${np}_${which}${rep}"
         # shellcheck disable=SC2086  # L_ENV is a list of VAR=value words
         /usr/bin/time -f "%e" -o "$out.time" env ${!ev:-} mpirun -np "$np" --oversubscribe "$bin" solve "$net" -o "$out.h5" \
-          --partition "${!pv:-${PARTITION:-metis}}" --max-iter "${ITERS:-1}" --tol 0 --refine mm -q --json "$out.json"
+          --partition "${!pv:-${PARTITION:-metis}}" --max-iter "${ITERS:-1}" --tol 0 --refine "${REFINE:-mm}" -q --json "$out.json"
         [ -n "$ref" ] || ref="$out.h5"
         $PY - "$out" "$ref" "$n" "$np" "$which" "$rep" "$(cat "$out.time")" "$(cut -d' ' -f1 /proc/loadavg)" "$rec" <<'PYEOF'
 import json, sys, h5py
@@ -59,15 +60,17 @@ j = json.load(open(out + ".json"))
 same = h5py.File(out + ".h5", "r")["positions"][()].tobytes() == h5py.File(ref, "r")["positions"][()].tobytes()
 r = {"n": int(n), "ranks": int(np_), "build": which, "rep": int(rep), "wall": float(wall), "load1": float(load),
      "positions_equal_first_A": same, "allocator": j.get("allocator", "system")}
-r.update({k: v for k, v in j.items() if k.startswith("setup_") or k in ("peak_rss_bytes_per_rank", "partition", "edge_cut", "ghosts")})
+r.update({k: v for k, v in j.items() if k.startswith("setup_") or k in ("peak_rss_bytes_per_rank", "partition", "edge_cut", "ghosts",
+                                                                    "read_seconds", "solve_seconds", "write_seconds")})
 its = max(1, j["iterations"] // 2)  # the pipeline's two phases, ITERS each
-r.update({p + "_ms_per_iteration": 1e3 * j.get(p + "_iterate_seconds", 0) / its for p in ("relaxation", "mm")})
+r.update({p + "_ms_per_iteration": 1e3 * j.get(p + "_iterate_seconds", 0) / its for p in ("relaxation", "mm", "mm-accel")})
 with open(rec, "a") as f:
     f.write(json.dumps(r) + "\n")
 g = lambda k: r.get("setup_graph." + k + "_seconds", 0)
 print(f"n={n} np={np_} {which}{rep} ({r['allocator']}, {r.get('partition')}, cut {r.get('edge_cut')}) load {load}: "
       f"wall {r['wall']:.2f} s, setup {r['setup_seconds']:.2f} (partition {r['setup_partition_seconds']:.2f}), "
-      f"ms/iteration relaxation {r['relaxation_ms_per_iteration']:.2f} MM {r['mm_ms_per_iteration']:.2f}, "
+      f"read {r.get('read_seconds', 0):.2f}, solve {r.get('solve_seconds', 0):.2f}, ms/iteration relaxation "
+      f"{r['relaxation_ms_per_iteration']:.2f} MM {r['mm_ms_per_iteration']:.2f} mm-accel {r['mm-accel_ms_per_iteration']:.2f}, "
       f"graph {r['setup_graph_seconds']:.2f} (exchange {g('exchange'):.2f}, lists {g('lists'):.2f}, "
       f"order {g('order'):.2f}, csr {g('csr'):.2f}), build bytes/rank {max(r['setup_graph_build_bytes_per_rank'])}, "
       f"peak RSS/rank {max(r['peak_rss_bytes_per_rank'])}, same positions {same}")
