@@ -205,26 +205,30 @@ OwnerDirectory OwnerDirectory::from_dense(MPI_Comm comm, GlobalId n, const std::
 }
 
 std::vector<GlobalId> OwnerDirectory::owned_nodes(std::vector<std::int32_t>* by_gid) const {
-  // Each block sends its nodes' indices to their owners; blocks arrive in
-  // rank order, each ascending, so the concatenation is in global id order.
+  // Each block sends its nodes, with their indices, to their owners in one
+  // exchange; blocks arrive in rank order, each ascending, so the
+  // concatenation is in global id order.
+  struct Node {
+    GlobalId g;
+    std::int32_t index;
+  };
   const MPI_Comm c = comm_.get();
   const int size = comm_size(c);
-  std::vector<std::vector<std::int32_t>> out(size);
-  std::vector<std::vector<GlobalId>> gids(size);
+  std::vector<std::vector<Node>> out(size);
   {  // counted first: no reallocation
     std::vector<std::size_t> cnt(size, 0);
     for (const Slot& s : slots_) ++cnt[s.owner];
-    for (int r = 0; r < size; ++r) out[r].reserve(cnt[r]), gids[r].reserve(cnt[r]);
+    for (int r = 0; r < size; ++r) out[r].reserve(cnt[r]);
   }
-  for (std::size_t t = 0; t < slots_.size(); ++t) {
-    out[slots_[t].owner].push_back(slots_[t].index);
-    gids[slots_[t].owner].push_back(begin_ + static_cast<GlobalId>(t));
+  for (std::size_t t = 0; t < slots_.size(); ++t)
+    out[slots_[t].owner].push_back({begin_ + static_cast<GlobalId>(t), slots_[t].index});
+  const std::vector<Node> got = exchange_records(c, out);
+  std::vector<GlobalId> owned(got.size());
+  if (by_gid) by_gid->resize(got.size());
+  for (std::size_t t = 0; t < got.size(); ++t) {
+    owned[static_cast<std::size_t>(got[t].index)] = got[t].g;
+    if (by_gid) (*by_gid)[t] = got[t].index;
   }
-  std::vector<std::int32_t> index = exchange_records(c, out);
-  const std::vector<GlobalId> g = exchange_records(c, gids);
-  std::vector<GlobalId> owned(index.size());
-  for (std::size_t t = 0; t < g.size(); ++t) owned[static_cast<std::size_t>(index[t])] = g[t];
-  if (by_gid) *by_gid = std::move(index);
   return owned;
 }
 
