@@ -22,6 +22,8 @@ void pack_offsets(std::vector<std::int64_t>& start, std::vector<int>& scount, in
   }
 }
 
+std::size_t edge_capacity(std::size_t n) { return n + n / 16 + 1024; }
+
 LocalOrdering default_local_ordering() {
   const char* e = std::getenv("SNL_LOCAL_ORDER");
   return (e && std::strcmp(e, "gid") == 0) ? LocalOrdering::kGlobalId : LocalOrdering::kRcm;
@@ -250,43 +252,96 @@ class PhaseClock {
   double mark_;
 };
 
+// After an exchange's counts are known: room in `into` for its first `keep`
+// items and `extra` more, reusing its storage where its capacity allows (the
+// records a rank keeps are the head of the vector they were packed from).
+template <class T>
+void make_room(std::vector<T>& into, std::size_t keep, std::size_t extra) {
+  if (keep + extra > into.capacity()) {
+    std::vector<T> bigger;
+    bigger.reserve(edge_capacity(keep + extra));
+    bigger.assign(into.begin(), into.begin() + static_cast<std::ptrdiff_t>(keep));
+    into.swap(bigger);
+  }
+  into.resize(keep + extra);
+}
+
+// Collective: an MPI_Alltoallv of `sbuf` (packed in rank order, scount[r]
+// items of `item_bytes` for rank r, none for this rank) received after the
+// first `keep` items of `into`, which grows to hold them.
+template <class T>
+void append_exchanged(MPI_Comm comm, const std::vector<T>& sbuf, const std::vector<int>& scount, std::vector<T>& into,
+                      std::size_t keep) {
+  const int size = comm_size(comm);
+  std::vector<int> rcount(size), sdisp(size), rdisp(size);
+  MPI_Alltoall(scount.data(), 1, MPI_INT, rcount.data(), 1, MPI_INT, comm);
+  std::int64_t rtot = 0, stot = 0;
+  for (int r = 0; r < size; ++r) {
+    sdisp[r] = static_cast<int>(stot);
+    rdisp[r] = static_cast<int>(std::min<std::int64_t>(rtot, INT32_MAX));
+    stot += scount[r];
+    rtot += rcount[r];
+  }
+  int ok = rtot <= INT32_MAX, all_ok = 0;
+  MPI_Allreduce(&ok, &all_ok, 1, MPI_INT, MPI_MIN, comm);
+  if (!all_ok) throw Error("edge exchange: more than 2^31 items received by one rank; use more ranks");
+  make_room(into, keep, static_cast<std::size_t>(rtot));
+  MPI_Datatype item;
+  MPI_Type_contiguous(static_cast<int>(sizeof(T)), MPI_BYTE, &item);
+  MPI_Type_commit(&item);
+  MPI_Alltoallv(sbuf.data(), scount.data(), sdisp.data(), item, into.data() + keep, rcount.data(), rdisp.data(), item,
+                comm);
+  MPI_Type_free(&item);
+}
+
 // Moves records (with `width` values each) to the rank dest(k) returns for
 // record k, and also to also(k) where that is another rank (-1: none);
-// returns what this rank received (rank order, then k order), values
-// alongside. Consumes recs and vals: they are packed straight into one send
-// buffer in rank order and freed before the exchange, so one copy of the
-// edges is in flight per hop (at 10M on 2 ranks per-destination vectors plus
-// exchange_records's packing held four). dest and also are called twice per
-// record (count, then pack): they must be cheap.
+// returns in `got` what this rank keeps (k order) and then what it received
+// (rank order, then k order), values alongside. Consumes recs and vals. The
+// records that stay on this rank are not copied out and back: they are
+// moved to the head of recs in place, whose storage becomes `got`; only the
+// others are packed into a send buffer in rank order (at 10M on 2 ranks half
+// of the records, where all of them went through the send buffer and
+// MPI's copy to self before). dest and also are called twice per record
+// (count, then pack): they must be cheap.
 template <class Rec, class Dest, class Also>
 void send_records(MPI_Comm comm, std::vector<Rec>&& recs, std::vector<double>&& vals, int width, Dest&& dest,
                   Also&& also, std::vector<Rec>& got, std::vector<double>& got_vals) {
-  const int size = comm_size(comm);
+  const int size = comm_size(comm), rank = comm_rank(comm);
+  const auto w = static_cast<std::size_t>(width);
   std::vector<std::int64_t> start(static_cast<std::size_t>(size) + 1, 0);
   for (std::size_t k = 0; k < recs.size(); ++k) {
     const int r = dest(k), r2 = also(k);
-    ++start[r + 1];
-    if (r2 >= 0 && r2 != r) ++start[r2 + 1];
+    if (r != rank) ++start[r + 1];
+    if (r2 >= 0 && r2 != r && r2 != rank) ++start[r2 + 1];
   }
   std::vector<int> scount, vcount(size);
   pack_offsets(start, scount, width, "edge exchange");
   for (int r = 0; r < size; ++r) vcount[r] = scount[r] * width;
   std::vector<Rec> sbuf(static_cast<std::size_t>(start[size]));
-  std::vector<double> svals(sbuf.size() * width);
+  std::vector<double> svals(sbuf.size() * w);
   auto put = [&](int r, std::size_t k) {
     const auto pos = start[r]++;
     sbuf[pos] = recs[k];
-    copy_values(vals.data() + k * width, svals.data() + pos * width, width);
+    copy_values(vals.data() + k * w, svals.data() + pos * w, width);
   };
+  std::size_t kept = 0;  // records [0, kept) stay here; kept <= k, so record k is read before it is overwritten
   for (std::size_t k = 0; k < recs.size(); ++k) {
     const int r = dest(k), r2 = also(k);
-    put(r, k);
-    if (r2 >= 0 && r2 != r) put(r2, k);
+    if (r != rank) put(r, k);
+    if (r2 >= 0 && r2 != r && r2 != rank) put(r2, k);
+    if (r != rank && r2 != rank) continue;
+    if (kept != k) {
+      recs[kept] = recs[k];
+      copy_values(vals.data() + k * w, vals.data() + kept * w, width);
+    }
+    ++kept;
   }
-  release(recs);
-  release(vals);
-  got = exchange_packed(comm, std::move(sbuf), scount);
-  got_vals = exchange_packed(comm, std::move(svals), vcount);
+  got = std::move(recs);
+  got_vals = std::move(vals);
+  append_exchanged(comm, sbuf, scount, got, kept);
+  release(sbuf);
+  append_exchanged(comm, svals, vcount, got_vals, kept * w);
 }
 
 // Tags each record's b with its directory slot (ob, ib): looked up here when
@@ -376,7 +431,9 @@ GlobalId route_edges(MPI_Comm comm, const OwnerDirectory& dir, std::vector<Globa
     auto in_block = [&](GlobalId g) { return g >= dir.block_begin() && g < dir.block_end(); };
     for (std::size_t k = 0; k < edges.size() && local; k += 2) local = in_block(edges[k]) || in_block(edges[k + 1]);
     MPI_Allreduce(&local, &all, 1, MPI_INT, MPI_MIN, comm);
-    std::vector<EdgeRec> pairs(edges.size() / 2);
+    std::vector<EdgeRec> pairs;
+    pairs.reserve(edge_capacity(edges.size() / 2));  // send_records receives after the records it keeps
+    pairs.resize(edges.size() / 2);
     std::vector<double> pair_vals = std::move(edge_values);
     for (std::size_t e = 0; e < pairs.size(); ++e) {
       const bool swap = all && !in_block(edges[2 * e]);
@@ -502,7 +559,9 @@ OwnedLists neighbour_lists(const OwnerDirectory& dir, int rank, std::vector<Edge
       if (r.ob == rank) put(r.ib, {r.a, r.oa, r.ia}, src);
     }
   }
-  L.peak_bytes = static_cast<std::int64_t>(mine.capacity() * sizeof(EdgeRec) + mine_vals.capacity() * sizeof(double) +
+  // (The records' size, not their capacity: the room reserved beyond them for
+  // the exchange is not touched unless filled.)
+  L.peak_bytes = static_cast<std::int64_t>(mine.size() * sizeof(EdgeRec) + mine_vals.size() * sizeof(double) +
                                            L.entries.capacity() * sizeof(Entry) + key.capacity() * 4 +
                                            L.vals.capacity() * sizeof(double) + bstart.capacity() * 16);
   release(mine);

@@ -75,6 +75,34 @@ bool any_rank(MPI_Comm comm, bool mine) {
   return out != 0;
 }
 
+// Writes the rows this rank kept and those it received (counts per sender)
+// into m in rank order, its own rows in its place: the order of the rows
+// sent to itself, so that a sorted network file (each rank's slab a range
+// of its rows) gives ascending rows, which merge_duplicates leaves as they are.
+void unpack_rows(int rank, const std::vector<SensorEdgeRec>& kept, const std::vector<SensorEdgeRec>& got,
+                 const std::vector<int>& rcount, Measurements& m) {
+  const std::size_t total = kept.size() + got.size();
+  m.sedges.resize(2 * total);
+  m.sranges.reserve(edge_capacity(total));  // the graph build receives edges in place (DistGraph)
+  m.sranges.resize(total);
+  if (m.has_ssigmas) m.ssigmas.resize(total);
+  std::size_t out = 0;
+  auto emit = [&](const SensorEdgeRec* p, const SensorEdgeRec* e) {
+    for (; p < e; ++p, ++out) {
+      m.sedges[2 * out] = p->i;
+      m.sedges[2 * out + 1] = p->j;
+      m.sranges[out] = p->r;
+      if (m.has_ssigmas) m.ssigmas[out] = p->s;
+    }
+  };
+  std::size_t off = 0;
+  for (int r = 0; r < static_cast<int>(rcount.size()); ++r) {
+    if (r == rank) emit(kept.data(), kept.data() + kept.size());
+    emit(got.data() + off, got.data() + off + rcount[r]);
+    off += static_cast<std::size_t>(rcount[r]);
+  }
+}
+
 // Step 1: merge duplicates. Every measurement goes to the block owner of one
 // of its two sensors, chosen by a hash of the pair, where all copies of the
 // pair meet; rep gets the counts. (The smaller id would load rank r with
@@ -88,9 +116,11 @@ Measurements merge_measurements(MPI_Comm comm, const Network& slab, Network* con
   m.has_ssigmas = any_rank(comm, !slab.sensor_sigmas.empty());
   m.has_asigmas = any_rank(comm, !slab.anchor_sigmas.empty());
   {
-    // Counted, then packed straight into one send buffer in rank order: at 10M
+    // Counted, then packed straight into one send buffer in rank order (at 10M
     // the per-rank vectors grew by reallocation and were copied once more to
-    // be sent.
+    // be sent); the rows this rank keeps go to their own buffer, not through
+    // MPI's copy to self.
+    const int rank = comm_rank(comm);
     const GlobalId ne = slab.local_sensor_edges();
     auto dest = [&](GlobalId e) {
       GlobalId a = slab.sensor_edges[2 * e], b = slab.sensor_edges[2 * e + 1];
@@ -100,15 +130,21 @@ Measurements merge_measurements(MPI_Comm comm, const Network& slab, Network* con
       return block_owner(n, size, key);
     };
     std::vector<std::int64_t> start(static_cast<std::size_t>(size) + 1, 0);
-    for (GlobalId e = 0; e < ne; ++e) ++start[dest(e) + 1];
+    std::size_t n_kept = 0;
+    for (GlobalId e = 0; e < ne; ++e) {
+      const int r = dest(e);
+      if (r == rank) ++n_kept; else ++start[r + 1];
+    }
     std::vector<int> scount;
     pack_offsets(start, scount, 1, "merge");
-    std::vector<SensorEdgeRec> sbuf(static_cast<std::size_t>(ne));
+    std::vector<SensorEdgeRec> sbuf(static_cast<std::size_t>(start[size])), kept(n_kept);
+    n_kept = 0;
     for (GlobalId e = 0; e < ne; ++e) {
       GlobalId a = slab.sensor_edges[2 * e], b = slab.sensor_edges[2 * e + 1];
       if (a > b) std::swap(a, b);
       const double sg = slab.sensor_sigmas.empty() ? 0.0 : slab.sensor_sigmas[e];
-      sbuf[static_cast<std::size_t>(start[dest(e)]++)] = {a, b, slab.sensor_ranges[e], sg};
+      const int r = dest(e);
+      (r == rank ? kept[n_kept++] : sbuf[static_cast<std::size_t>(start[r]++)]) = {a, b, slab.sensor_ranges[e], sg};
     }
     if (consumed) {  // at 10M on 2 ranks 0.96 GB per rank less at the exchange's peak
       release(consumed->sensor_edges);
@@ -116,17 +152,10 @@ Measurements merge_measurements(MPI_Comm comm, const Network& slab, Network* con
       release(consumed->sensor_sigmas);
       release(consumed->sensor_nlos);
     }
-    const std::vector<SensorEdgeRec> got = exchange_packed(comm, std::move(sbuf), scount);
+    std::vector<int> rcount;
+    std::vector<SensorEdgeRec> got = exchange_packed(comm, std::move(sbuf), scount, &rcount);
     test_fail_point("alloc");  // fault-injection tests: one rank runs out of memory between collectives
-    m.sedges.resize(2 * got.size());
-    m.sranges.resize(got.size());
-    if (m.has_ssigmas) m.ssigmas.resize(got.size());
-    for (std::size_t k = 0; k < got.size(); ++k) {
-      m.sedges[2 * k] = got[k].i;
-      m.sedges[2 * k + 1] = got[k].j;
-      m.sranges[k] = got[k].r;
-      if (m.has_ssigmas) m.ssigmas[k] = got[k].s;
-    }
+    unpack_rows(rank, kept, got, rcount, m);
   }  // the received records are freed before the merge sorts
   std::vector<std::vector<AnchorEdgeRec>> aout(size);
   for (GlobalId e = 0; e < slab.local_anchor_edges(); ++e) {
@@ -277,7 +306,9 @@ void LocalizationProblem::build(MPI_Comm comm, const Network& slab, Network* con
   rep.setup_bytes.emplace_back("directory", owners.memory_bytes());
   // The merged lists move into the graph build, which frees them once it has its own records.
   if (m.has_ssigmas) {  // sigmas ride along as a second column, then move to their own array
-    std::vector<double> vals(2 * m.sranges.size());
+    std::vector<double> vals;
+    vals.reserve(2 * edge_capacity(m.sranges.size()));
+    vals.resize(2 * m.sranges.size());
     for (std::size_t e = 0; e < m.sranges.size(); ++e) {
       vals[2 * e] = m.sranges[e];
       vals[2 * e + 1] = m.ssigmas[e];

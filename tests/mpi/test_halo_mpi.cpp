@@ -42,3 +42,45 @@ TEST(Halo, GhostsReceiveOwnersValues) {
   MPI_Allreduce(&owned, &total, 1, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
   EXPECT_EQ(total, 200);
 }
+
+// Every edge held by rank 0 and every node owned away from its block: the
+// other ranks start with no edges and receive thousands in each hop, more
+// than the room reserved after the records they keep (edge_capacity), so the
+// graph build's exchanges take their copying route too. Each owned node's
+// neighbours and values, in global-id order, against the edge list.
+TEST(DistGraph, EdgesHeldByOneRankReachTheirOwners) {
+  const int P = world_size(), me = world_rank();
+  const GlobalId n = 4000;
+  std::vector<int> owner(n);
+  for (GlobalId v = 0; v < n; ++v) owner[v] = static_cast<int>((v * 7 + v / 3) % P);
+  std::vector<std::vector<std::pair<GlobalId, double>>> want(n);
+  std::vector<GlobalId> edges;
+  std::vector<double> vals;
+  for (GlobalId v = 0; v < n; ++v)
+    for (const GlobalId u : {v + 1, v + 61}) {  // a band: (v, v + 1) and (v, v + 61)
+      if (u >= n) continue;
+      const double a = 1.0 + 0.5 * v + 0.25 * u, b = -static_cast<double>(v * 3 + u);
+      want[v].push_back({u, a});
+      want[u].push_back({v, a});
+      if (me != 0) continue;
+      edges.insert(edges.end(), {v % 2 ? u : v, v % 2 ? v : u});  // either end first
+      vals.insert(vals.end(), {a, b});
+    }
+  const DistGraph g(MPI_COMM_WORLD, n, owner, std::move(edges), std::move(vals), 2, 2);
+  long long owned = g.num_owned(), total = 0;
+  MPI_Allreduce(&owned, &total, 1, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
+  EXPECT_EQ(total, static_cast<long long>(n));
+  for (LocalId v = 0; v < g.num_owned(); ++v) {
+    const GlobalId gv = g.global_id(v);
+    EXPECT_EQ(owner[gv], me);
+    auto w = want[gv];
+    std::sort(w.begin(), w.end());
+    ASSERT_EQ(g.offsets()[v + 1] - g.offsets()[v], static_cast<std::int64_t>(w.size())) << gv;
+    for (std::size_t t = 0; t < w.size(); ++t) {
+      const auto k = static_cast<std::size_t>(g.offsets()[v]) + t;
+      EXPECT_EQ(g.global_id(g.adjacency()[k]), w[t].first);
+      EXPECT_EQ(g.edge_values()[2 * k], w[t].second);
+      EXPECT_EQ(g.edge_values()[2 * k + 1], -static_cast<double>(std::min(gv, w[t].first) * 3 + std::max(gv, w[t].first)));
+    }
+  }
+}

@@ -73,6 +73,50 @@ TEST(Problem, MovedSlabIsFreedAfterTheMergeAndGivesTheSameProblem) {
   }
 }
 
+// The merge keeps each rank's own rows out of the exchange and puts them
+// back in its rank's place among the received ones: a sorted network and the
+// same rows in reverse order, each pair written the other way round (which
+// merge_duplicates must sort), give the same problem, with every pair once.
+TEST(Problem, SortedAndReversedRowsGiveTheSameProblem) {
+  NetSpec s;
+  s.n = 90;
+  Network w = make_network(s);
+  for (std::size_t e = 0; e < w.sensor_ranges.size(); ++e) w.sensor_sigmas.push_back(0.01 + 0.001 * (e % 7));
+  Network rev = w;
+  const std::size_t ne = w.sensor_ranges.size();
+  for (std::size_t e = 0; e < ne; ++e) {
+    rev.sensor_edges[2 * e] = w.sensor_edges[2 * (ne - 1 - e) + 1];
+    rev.sensor_edges[2 * e + 1] = w.sensor_edges[2 * (ne - 1 - e)];
+    rev.sensor_ranges[e] = w.sensor_ranges[ne - 1 - e];
+    rev.sensor_sigmas[e] = w.sensor_sigmas[ne - 1 - e];
+  }
+  ProblemReport ra, rb;
+  const LocalizationProblem a(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kMetis, &ra);
+  const LocalizationProblem b(MPI_COMM_WORLD, slab_of(rev, MPI_COMM_WORLD), PartitionMethod::kMetis, &rb);
+  EXPECT_EQ(ra.num_sensor_edges, static_cast<std::int64_t>(ne));
+  EXPECT_EQ(rb.num_sensor_edges, static_cast<std::int64_t>(ne));
+  EXPECT_EQ(ra.merged.merged_sensor_pairs, 0);
+  EXPECT_EQ(a.num_local(), b.num_local());
+  for (LocalId v = 0; v < std::min(a.num_local(), b.num_local()); ++v)
+    EXPECT_EQ(a.graph().global_id(v), b.graph().global_id(v));
+  EXPECT_EQ(a.graph().offsets(), b.graph().offsets());
+  EXPECT_EQ(a.graph().adjacency(), b.graph().adjacency());
+  EXPECT_EQ(a.graph().edge_values(), b.graph().edge_values());
+  EXPECT_EQ(a.sensor_sigmas(), b.sensor_sigmas());
+  // Every pair's range at both its ends, against the file.
+  for (LocalId v = 0; v < a.graph().num_owned(); ++v)
+    for (auto k = a.graph().offsets()[v]; k < a.graph().offsets()[v + 1]; ++k) {
+      GlobalId i = a.graph().global_id(v), j = a.graph().global_id(a.graph().adjacency()[k]);
+      if (i > j) std::swap(i, j);
+      std::size_t e = 0;
+      while (e < ne && !(w.sensor_edges[2 * e] == i && w.sensor_edges[2 * e + 1] == j)) ++e;
+      EXPECT_LT(e, ne) << i << " " << j;  // (no ASSERT: the destructors free communicators)
+      if (e == ne) continue;
+      EXPECT_EQ(a.graph().edge_values()[k], w.sensor_ranges[e]);
+      EXPECT_EQ(a.sensor_sigmas()[k], w.sensor_sigmas[e]);
+    }
+}
+
 // The serial twin of the partition's graph: every pair's two half-edges
 // counted, scattered and each row sorted, on the whole pair list at once.
 static void reference_root_csr(GlobalId n, const std::vector<GlobalId>& pairs, std::vector<std::int64_t>& xadj,

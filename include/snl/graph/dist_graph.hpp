@@ -130,9 +130,11 @@ void pack_offsets(std::vector<std::int64_t>& start, std::vector<int>& scount, in
 /// Collective: an MPI_Alltoallv of a send buffer already in rank order
 /// (scount[r] items for rank r) of trivially copyable items, which it
 /// consumes; returns what this rank received, in rank order. On one rank the
-/// buffer itself is returned (no copy).
+/// buffer itself is returned (no copy). With `recv_counts`, how many came
+/// from each rank.
 template <class T>
-std::vector<T> exchange_packed(MPI_Comm comm, std::vector<T>&& sbuf, const std::vector<int>& scount);
+std::vector<T> exchange_packed(MPI_Comm comm, std::vector<T>&& sbuf, const std::vector<int>& scount,
+                               std::vector<int>* recv_counts = nullptr);
 
 /// Collective all-to-all of trivially copyable records: out[r] goes to rank r;
 /// returns what this rank received, concatenated in rank order.
@@ -140,6 +142,13 @@ std::vector<T> exchange_packed(MPI_Comm comm, std::vector<T>&& sbuf, const std::
 template <class T>
 std::vector<T> exchange_records(MPI_Comm comm, const std::vector<std::vector<T>>& out,
                                 std::vector<int>* recv_counts = nullptr);
+
+/// A capacity for n edges with room beyond them (their values: width times
+/// it; reserved, so not touched): the DistGraph
+/// constructor receives the edges other ranks send after those it keeps, in
+/// the storage of the vectors it was given where their capacity allows, and
+/// copies them into a larger one where it does not.
+std::size_t edge_capacity(std::size_t n);
 
 /// Order of the owned nodes inside the interior and boundary groups.
 /// kRcm: reverse Cuthill-McKee on the owned subgraph, so that neighbours are
@@ -238,10 +247,14 @@ class DistGraph {
 
 // ---- template implementation ----
 template <class T>
-std::vector<T> exchange_packed(MPI_Comm comm, std::vector<T>&& sbuf, const std::vector<int>& scount) {
+std::vector<T> exchange_packed(MPI_Comm comm, std::vector<T>&& sbuf, const std::vector<int>& scount,
+                               std::vector<int>* recv_counts) {
   int size = 1;
   MPI_Comm_size(comm, &size);
-  if (size == 1) return std::move(sbuf);  // nothing to move between ranks
+  if (size == 1) {  // nothing to move between ranks
+    if (recv_counts) *recv_counts = scount;
+    return std::move(sbuf);
+  }
   MPI_Datatype rec;
   MPI_Type_contiguous(static_cast<int>(sizeof(T)), MPI_BYTE, &rec);
   MPI_Type_commit(&rec);
@@ -259,6 +272,7 @@ std::vector<T> exchange_packed(MPI_Comm comm, std::vector<T>&& sbuf, const std::
   MPI_Alltoallv(sbuf.data(), scount.data(), sdisp.data(), rec, rbuf.data(), rcount.data(), rdisp.data(), rec, comm);
   MPI_Type_free(&rec);
   release(sbuf);
+  if (recv_counts) *recv_counts = rcount;
   return rbuf;
 }
 
