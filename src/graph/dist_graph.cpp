@@ -252,48 +252,6 @@ class PhaseClock {
   double mark_;
 };
 
-// After an exchange's counts are known: room in `into` for its first `keep`
-// items and `extra` more, reusing its storage where its capacity allows (the
-// records a rank keeps are the head of the vector they were packed from).
-template <class T>
-void make_room(std::vector<T>& into, std::size_t keep, std::size_t extra) {
-  if (keep + extra > into.capacity()) {
-    std::vector<T> bigger;
-    bigger.reserve(edge_capacity(keep + extra));
-    bigger.assign(into.begin(), into.begin() + static_cast<std::ptrdiff_t>(keep));
-    into.swap(bigger);
-  }
-  into.resize(keep + extra);
-}
-
-// Collective: an MPI_Alltoallv of `sbuf` (packed in rank order, scount[r]
-// items of `item_bytes` for rank r, none for this rank) received after the
-// first `keep` items of `into`, which grows to hold them.
-template <class T>
-void append_exchanged(MPI_Comm comm, const std::vector<T>& sbuf, const std::vector<int>& scount, std::vector<T>& into,
-                      std::size_t keep) {
-  const int size = comm_size(comm);
-  std::vector<int> rcount(size), sdisp(size), rdisp(size);
-  MPI_Alltoall(scount.data(), 1, MPI_INT, rcount.data(), 1, MPI_INT, comm);
-  std::int64_t rtot = 0, stot = 0;
-  for (int r = 0; r < size; ++r) {
-    sdisp[r] = static_cast<int>(stot);
-    rdisp[r] = static_cast<int>(std::min<std::int64_t>(rtot, INT32_MAX));
-    stot += scount[r];
-    rtot += rcount[r];
-  }
-  int ok = rtot <= INT32_MAX, all_ok = 0;
-  MPI_Allreduce(&ok, &all_ok, 1, MPI_INT, MPI_MIN, comm);
-  if (!all_ok) throw Error("edge exchange: more than 2^31 items received by one rank; use more ranks");
-  make_room(into, keep, static_cast<std::size_t>(rtot));
-  MPI_Datatype item;
-  MPI_Type_contiguous(static_cast<int>(sizeof(T)), MPI_BYTE, &item);
-  MPI_Type_commit(&item);
-  MPI_Alltoallv(sbuf.data(), scount.data(), sdisp.data(), item, into.data() + keep, rcount.data(), rdisp.data(), item,
-                comm);
-  MPI_Type_free(&item);
-}
-
 // Moves records (with `width` values each) to the rank dest(k) returns for
 // record k, and also to also(k) where that is another rank (-1: none);
 // returns in `got` what this rank keeps (k order) and then what it received
@@ -339,9 +297,9 @@ void send_records(MPI_Comm comm, std::vector<Rec>&& recs, std::vector<double>&& 
   }
   got = std::move(recs);
   got_vals = std::move(vals);
-  append_exchanged(comm, sbuf, scount, got, kept);
+  exchange_packed_into(comm, sbuf, scount, got, kept);
   release(sbuf);
-  append_exchanged(comm, svals, vcount, got_vals, kept * w);
+  exchange_packed_into(comm, svals, vcount, got_vals, kept * w);
 }
 
 // Tags each record's b with its directory slot (ob, ib): looked up here when

@@ -133,7 +133,11 @@ Measurements merge_measurements(MPI_Comm comm, const Network& slab, Network* con
     std::size_t n_kept = 0;
     for (GlobalId e = 0; e < ne; ++e) {
       const int r = dest(e);
-      if (r == rank) ++n_kept; else ++start[r + 1];
+      if (r == rank) {
+        ++n_kept;
+      } else {
+        ++start[r + 1];
+      }
     }
     std::vector<int> scount;
     pack_offsets(start, scount, 1, "merge");

@@ -80,7 +80,8 @@ TEST(DistGraph, EdgesHeldByOneRankReachTheirOwners) {
       const auto k = static_cast<std::size_t>(g.offsets()[v]) + t;
       EXPECT_EQ(g.global_id(g.adjacency()[k]), w[t].first);
       EXPECT_EQ(g.edge_values()[2 * k], w[t].second);
-      EXPECT_EQ(g.edge_values()[2 * k + 1], -static_cast<double>(std::min(gv, w[t].first) * 3 + std::max(gv, w[t].first)));
+      const GlobalId lo = std::min(gv, w[t].first), hi = std::max(gv, w[t].first);
+      EXPECT_EQ(g.edge_values()[2 * k + 1], -static_cast<double>(lo * 3 + hi));
     }
   }
 }
