@@ -139,8 +139,8 @@ std::vector<T> exchange_packed(MPI_Comm comm, std::vector<T>&& sbuf, const std::
                                std::vector<int>* recv_counts = nullptr);
 
 /// Collective: the same exchange, what this rank receives placed after the
-/// first `keep` items of `into` (the items it keeps; none sent to itself),
-/// which grows to hold them: in its own storage where its capacity allows,
+/// first `keep` items of `into` (the items a caller keeps instead of sending
+/// them to itself), which grows to hold them: in its own storage where its capacity allows,
 /// else in a larger vector (with edge_capacity's room where keep > 0) that
 /// takes only the kept items along. Every rank agrees on a refusal of more
 /// than 2^31 items received by one rank.
@@ -155,11 +155,11 @@ template <class T>
 std::vector<T> exchange_records(MPI_Comm comm, const std::vector<std::vector<T>>& out,
                                 std::vector<int>* recv_counts = nullptr);
 
-/// A capacity for n edges with room beyond them (their values: width times
-/// it; reserved, so not touched): the DistGraph
-/// constructor receives the edges other ranks send after those it keeps, in
-/// the storage of the vectors it was given where their capacity allows, and
-/// copies them into a larger one where it does not.
+/// A capacity for n edges with room beyond them (for their values, width
+/// times it; reserved, so not touched): the DistGraph constructor receives
+/// the edges other ranks send after those it keeps, in the storage of the
+/// vectors it was given where their capacity allows, and copies them into a
+/// larger one where it does not.
 std::size_t edge_capacity(std::size_t n);
 
 /// Order of the owned nodes inside the interior and boundary groups.
