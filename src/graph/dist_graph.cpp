@@ -29,6 +29,11 @@ LocalOrdering default_local_ordering() {
   return (e && std::strcmp(e, "gid") == 0) ? LocalOrdering::kGlobalId : LocalOrdering::kRcm;
 }
 
+bool setup_wide_ids(GlobalId n) {
+  const char* e = std::getenv("SNL_SETUP_IDS");
+  return n > std::numeric_limits<std::int32_t>::max() || (e && std::strcmp(e, "64") == 0);
+}
+
 namespace {
 // Copies one edge's `width` values. std::copy with a run-time count became a
 // call to memmove per edge (80M calls per rank at 10M sensors in the lists
@@ -45,14 +50,17 @@ inline void copy_values(const double* src, double* dst, int width) {
 }
 
 // An edge with the owner and owner-side index of both ends (OwnerDirectory::Slot).
+// Id: the node ids' type, 32-bit below 2^31 nodes (DistGraph::build).
+template <class Id>
 struct EdgeRec {
-  GlobalId a, b;
+  Id a, b;
   std::int32_t oa, ia, ob, ib;
 };
 // One neighbour of an owned node: its global id and directory slot
 // (OwnerDirectory::Slot), so that no later pass reads the edge records again.
+template <class Id>
 struct Entry {
-  GlobalId nbr;
+  Id nbr;
   std::int32_t owner, index;
 };
 
@@ -304,10 +312,11 @@ void send_records(MPI_Comm comm, std::vector<Rec>&& recs, std::vector<double>&& 
 
 // Tags each record's b with its directory slot (ob, ib): looked up here when
 // b is in this rank's block, else asked of its block holder (the ids out and
-// the slots back, 16 bytes per edge, where moving the records to the block
+// the slots back, 8 + sizeof(Id) bytes per edge, where moving the records to the block
 // holder and on from there moved 32 + 8 width bytes and allocated a second
 // copy of them). Collective.
-void tag_b(MPI_Comm comm, const OwnerDirectory& dir, std::vector<EdgeRec>& recs) {
+template <class Id>
+void tag_b(MPI_Comm comm, const OwnerDirectory& dir, std::vector<EdgeRec<Id>>& recs) {
   const int size = comm_size(comm);
   const detail::Blocks blocks(dir.num_global(), size);
   auto mine = [&](GlobalId g) { return g >= dir.block_begin() && g < dir.block_end(); };
@@ -317,7 +326,7 @@ void tag_b(MPI_Comm comm, const OwnerDirectory& dir, std::vector<EdgeRec>& recs)
   std::vector<int> scount;
   pack_offsets(start, scount, 1, "directory lookup");
   std::vector<std::int64_t> first(start.begin(), start.end() - 1);
-  std::vector<GlobalId> ask(static_cast<std::size_t>(start[size]));
+  std::vector<Id> ask(static_cast<std::size_t>(start[size]));
   constexpr std::size_t kAhead = 16;  // directory lookups in flight (OwnerDirectory::prefetch)
   for (std::size_t k = 0; k < recs.size(); ++k) {
     if (k + kAhead < recs.size() && mine(recs[k + kAhead].b)) dir.prefetch(recs[k + kAhead].b);
@@ -342,9 +351,10 @@ void tag_b(MPI_Comm comm, const OwnerDirectory& dir, std::vector<EdgeRec>& recs)
   int ok = rtot <= INT32_MAX && start[size] <= INT32_MAX, all_ok = 0;
   MPI_Allreduce(&ok, &all_ok, 1, MPI_INT, MPI_MIN, comm);
   if (!all_ok) throw Error("directory lookup: more than 2^31 ids on one rank; use more ranks");
-  std::vector<GlobalId> asked(static_cast<std::size_t>(rtot));
-  MPI_Alltoallv(ask.data(), scount.data(), sdisp.data(), MPI_INT64_T, asked.data(), rcount.data(), rdisp.data(),
-                MPI_INT64_T, comm);
+  std::vector<Id> asked(static_cast<std::size_t>(rtot));
+  const MPI_Datatype id_type = sizeof(Id) == 4 ? MPI_INT32_T : MPI_INT64_T;
+  MPI_Alltoallv(ask.data(), scount.data(), sdisp.data(), id_type, asked.data(), rcount.data(), rdisp.data(), id_type,
+                comm);
   release(ask);
   std::vector<OwnerDirectory::Slot> answer(asked.size());
   for (std::size_t k = 0; k < asked.size(); ++k) {
@@ -377,25 +387,27 @@ void tag_b(MPI_Comm comm, const OwnerDirectory& dir, std::vector<EdgeRec>& recs)
 // sends them to the owners. Edges are undirected: a and b may swap. Returns
 // the local edge cut. Consumes edges and edge_values (freed once the first
 // records are built).
+template <class Id>
 GlobalId route_edges(MPI_Comm comm, const OwnerDirectory& dir, std::vector<GlobalId>&& edges,
-                     std::vector<double>&& edge_values, int width, std::vector<EdgeRec>& mine,
+                     std::vector<double>&& edge_values, int width, std::vector<EdgeRec<Id>>& mine,
                      std::vector<double>& mine_vals) {
   const detail::Blocks blocks(dir.num_global(), comm_size(comm));
   auto none = [](std::size_t) { return -1; };
-  std::vector<EdgeRec> recs;
+  std::vector<EdgeRec<Id>> recs;
   std::vector<double> vals;
   {
     int local = 1, all = 0;
     auto in_block = [&](GlobalId g) { return g >= dir.block_begin() && g < dir.block_end(); };
     for (std::size_t k = 0; k < edges.size() && local; k += 2) local = in_block(edges[k]) || in_block(edges[k + 1]);
     MPI_Allreduce(&local, &all, 1, MPI_INT, MPI_MIN, comm);
-    std::vector<EdgeRec> pairs;
+    std::vector<EdgeRec<Id>> pairs;
     pairs.reserve(edge_capacity(edges.size() / 2));  // send_records receives after the records it keeps
     pairs.resize(edges.size() / 2);
     std::vector<double> pair_vals = std::move(edge_values);
     for (std::size_t e = 0; e < pairs.size(); ++e) {
       const bool swap = all && !in_block(edges[2 * e]);
-      pairs[e] = {edges[2 * e + (swap ? 1 : 0)], edges[2 * e + (swap ? 0 : 1)], -1, -1, -1, -1};
+      pairs[e] = {static_cast<Id>(edges[2 * e + (swap ? 1 : 0)]), static_cast<Id>(edges[2 * e + (swap ? 0 : 1)]),
+                  -1, -1, -1, -1};
     }
     release(edges);
     if (all) {
@@ -423,11 +435,12 @@ GlobalId route_edges(MPI_Comm comm, const OwnerDirectory& dir, std::vector<Globa
 
 // The owned nodes and their neighbour lists, indexed by position in `owned`
 // (the directory's owner-side index), before the local numbering.
+template <class Id>
 struct OwnedLists {
   std::vector<GlobalId> owned;    // owned nodes in owner-side index order
   std::vector<std::int32_t> by_gid;  // their owner-side indices in ascending global id
   std::vector<std::int64_t> cnt;  // owned index v: entries [cnt[v], cnt[v + 1])
-  std::vector<Entry> entries;     // per node sorted by neighbour global id
+  std::vector<Entry<Id>> entries;  // per node sorted by neighbour global id
   std::vector<double> vals;       // `width` values per entry
   std::vector<char> boundary;     // owned index v has a neighbour on another rank
   int rank = 0, width = 0;
@@ -438,15 +451,16 @@ struct OwnedLists {
 
 // Sorts node v's entries [b, e) (and their values) by neighbour global id:
 // insertion sort for the usual few, an index sort for hubs.
-void sort_by_neighbour(OwnedLists& L, std::int64_t b, std::int64_t e, std::vector<double>& tmp,
+template <class Id>
+void sort_by_neighbour(OwnedLists<Id>& L, std::int64_t b, std::int64_t e, std::vector<double>& tmp,
                        std::vector<std::int64_t>& perm) {
   const int w = L.width;
-  Entry* ent = L.entries.data();
+  Entry<Id>* ent = L.entries.data();
   double* val = L.vals.data();
   if (e - b <= 32) {
     for (std::int64_t i = b + 1; i < e; ++i) {
       if (!(ent[i].nbr < ent[i - 1].nbr)) continue;
-      const Entry x = ent[i];
+      const Entry<Id> x = ent[i];
       copy_values(val + i * w, tmp.data(), w);
       std::int64_t j = i;
       for (; j > b && x.nbr < ent[j - 1].nbr; --j) {
@@ -461,7 +475,7 @@ void sort_by_neighbour(OwnedLists& L, std::int64_t b, std::int64_t e, std::vecto
   perm.resize(static_cast<std::size_t>(e - b));
   std::iota(perm.begin(), perm.end(), b);
   std::sort(perm.begin(), perm.end(), [&](std::int64_t x, std::int64_t y) { return ent[x].nbr < ent[y].nbr; });
-  std::vector<Entry> se(perm.size());
+  std::vector<Entry<Id>> se(perm.size());
   std::vector<double> sv(perm.size() * w);
   for (std::size_t t = 0; t < perm.size(); ++t) {
     se[t] = ent[perm[t]];
@@ -480,10 +494,11 @@ void sort_by_neighbour(OwnedLists& L, std::int64_t b, std::int64_t e, std::vecto
 // in place. Every later pass reads the lists in order, with each neighbour's
 // directory slot and values at hand: none goes back to the edge records at
 // random (at 10M on 2 ranks that indirection made the build latency-bound).
-OwnedLists neighbour_lists(const OwnerDirectory& dir, int rank, std::vector<EdgeRec>&& mine,
+template <class Id>
+OwnedLists<Id> neighbour_lists(const OwnerDirectory& dir, int rank, std::vector<EdgeRec<Id>>&& mine,
                            std::vector<double>&& mine_vals, int width) {
   constexpr std::int64_t kBuckets = 4096;
-  OwnedLists L;
+  OwnedLists<Id> L;
   L.rank = rank;
   L.width = width;
   const auto n_owned = static_cast<std::int64_t>(dir.counts()[static_cast<std::size_t>(rank)]);
@@ -504,7 +519,7 @@ OwnedLists neighbour_lists(const OwnerDirectory& dir, int rank, std::vector<Edge
   std::vector<std::int32_t> key(static_cast<std::size_t>(total));  // the owned end of each half-edge
   {
     std::vector<std::int64_t> fill(bstart.begin(), bstart.end() - 1);
-    auto put = [&](std::int32_t v, const Entry& e, const double* src) {
+    auto put = [&](std::int32_t v, const Entry<Id>& e, const double* src) {
       const auto p = fill[v >> shift]++;
       L.entries[p] = e;
       key[p] = v;
@@ -519,8 +534,8 @@ OwnedLists neighbour_lists(const OwnerDirectory& dir, int rank, std::vector<Edge
   }
   // (The records' size, not their capacity: the room reserved beyond them for
   // the exchange is not touched unless filled.)
-  L.peak_bytes = static_cast<std::int64_t>(mine.size() * sizeof(EdgeRec) + mine_vals.size() * sizeof(double) +
-                                           L.entries.capacity() * sizeof(Entry) + key.capacity() * 4 +
+  L.peak_bytes = static_cast<std::int64_t>(mine.size() * sizeof(EdgeRec<Id>) + mine_vals.size() * sizeof(double) +
+                                           L.entries.capacity() * sizeof(Entry<Id>) + key.capacity() * 4 +
                                            L.vals.capacity() * sizeof(double) + bstart.capacity() * 16);
   release(mine);
   release(mine_vals);
@@ -528,7 +543,7 @@ OwnedLists neighbour_lists(const OwnerDirectory& dir, int rank, std::vector<Edge
   L.owned = dir.owned_nodes(&L.by_gid);
   L.cnt.assign(static_cast<std::size_t>(n_owned) + 1, 0);
   L.boundary.assign(static_cast<std::size_t>(n_owned), 0);
-  std::vector<Entry> b_ent;
+  std::vector<Entry<Id>> b_ent;
   std::vector<std::int32_t> b_key;
   std::vector<double> b_val, tmp(static_cast<std::size_t>(std::max(width, 1)));
   std::vector<std::int64_t> perm, fill;
@@ -558,7 +573,8 @@ OwnedLists neighbour_lists(const OwnerDirectory& dir, int rank, std::vector<Edge
 
 // RCM order of the two groups of owned indices (group[0] interior, group[1]
 // boundary), each then sorted by degree within windows.
-void rcm_groups(const OwnedLists& L, std::vector<std::int64_t> (&group)[2]) {
+template <class Id>
+void rcm_groups(const OwnedLists<Id>& L, std::vector<std::int64_t> (&group)[2]) {
   // Owned-index adjacency (-1 for ghosts) and group positions for the BFS.
   auto nbr = [&L](std::int64_t k) -> std::int64_t { return L.nbr_owner(k) == L.rank ? L.nbr_index(k) : -1; };
   std::vector<std::int32_t> pos(L.owned.size(), -1);  // 32-bit: n_owned < 2^31 (neighbour_lists)
@@ -582,7 +598,8 @@ void rcm_groups(const OwnedLists& L, std::vector<std::int64_t> (&group)[2]) {
 // Step 3: owned indices in local order: interior, then boundary, each group
 // in RCM (from owner-side index order: the bfs partition's bands keep its
 // scans near in memory) or global id order. Sets n_interior.
-std::vector<std::int64_t> local_order(const OwnedLists& L, LocalOrdering ordering, LocalId& n_interior) {
+template <class Id>
+std::vector<std::int64_t> local_order(const OwnedLists<Id>& L, LocalOrdering ordering, LocalId& n_interior) {
   std::vector<std::int64_t> group[2];
   const bool rcm = ordering == LocalOrdering::kRcm;
   for (std::size_t t = 0; t < L.owned.size(); ++t) {
@@ -603,7 +620,8 @@ struct Ghost {
   GlobalId g;
 };
 
-std::vector<Ghost> ghost_nodes(const OwnedLists& L, int rank) {
+template <class Id>
+std::vector<Ghost> ghost_nodes(const OwnedLists<Id>& L, int rank) {
   std::vector<Ghost> ghosts;
   for (std::size_t k = 0; k < L.entries.size(); ++k)
     if (L.nbr_owner(k) != rank) ghosts.push_back({L.nbr_owner(k), L.nbr_index(k), L.entries[k].nbr});
@@ -628,7 +646,8 @@ struct LocalIds {
 
 // Step 4 (cont.): local ids: owned nodes in `order`, then the ghosts; fills
 // the graph's local_to_global and owned_sorted.
-LocalIds number_nodes(const OwnedLists& L, const std::vector<std::int64_t>& order, const std::vector<Ghost>& ghosts,
+template <class Id>
+LocalIds number_nodes(const OwnedLists<Id>& L, const std::vector<std::int64_t>& order, const std::vector<Ghost>& ghosts,
                       std::vector<GlobalId>& local_to_global, std::vector<std::pair<GlobalId, LocalId>>& owned_sorted) {
   const std::size_t n_owned = L.owned.size();
   LocalIds ids;
@@ -650,7 +669,8 @@ LocalIds number_nodes(const OwnedLists& L, const std::vector<std::int64_t>& orde
 
 // Step 5: the CSR in local order, neighbours in global-id order, with the
 // edges' values.
-void fill_csr(const OwnedLists& L, const std::vector<std::int64_t>& order, const LocalIds& ids,
+template <class Id>
+void fill_csr(const OwnedLists<Id>& L, const std::vector<std::int64_t>& order, const LocalIds& ids,
               int rank, int width,
               std::vector<std::int64_t>& offsets, std::vector<LocalId>& adjacency, std::vector<double>& values) {
   const std::size_t n = order.size();
@@ -690,7 +710,8 @@ void fill_csr(const OwnedLists& L, const std::vector<std::int64_t>& order, const
 // Step 6: the halo plan. Each owner is told which of its nodes we need, in
 // our ghost order (one all-to-all of the request lists); what the others ask
 // of us becomes our send lists. Requests name the owner-side index.
-HaloPlan make_halo(MPI_Comm comm, const std::vector<Ghost>& ghosts, const OwnedLists& L, const LocalIds& ids,
+template <class Id>
+HaloPlan make_halo(MPI_Comm comm, const std::vector<Ghost>& ghosts, const OwnedLists<Id>& L, const LocalIds& ids,
                    int halo_width) {
   const int size = comm_size(comm);
   std::vector<std::vector<GlobalId>> requests(size);
@@ -741,16 +762,28 @@ DistGraph::DistGraph(MPI_Comm comm, GlobalId n, const std::vector<int>& owner, s
 DistGraph::DistGraph(MPI_Comm comm, const OwnerDirectory& owners, std::vector<GlobalId> edges,
                      std::vector<double> edge_values, int width, int halo_width, LocalOrdering ordering)
     : comm_(comm), n_global_(owners.num_global()), width_(width) {
+  // Below 2^31 nodes the build's records and lists carry 32-bit ids: at 10M
+  // sensors on 2 ranks 8 bytes less per edge record and 4 per list entry
+  // (docs/performance.md).
+  if (setup_wide_ids(n_global_))
+    build<GlobalId>(owners, std::move(edges), std::move(edge_values), halo_width, ordering);
+  else
+    build<std::int32_t>(owners, std::move(edges), std::move(edge_values), halo_width, ordering);
+}
+
+template <class Id>
+void DistGraph::build(const OwnerDirectory& owners, std::vector<GlobalId>&& edges, std::vector<double>&& edge_values,
+                      int halo_width, LocalOrdering ordering) {
   const MPI_Comm gc = comm_.get();  // the graph's own duplicate (halo traffic apart from the caller's)
-  const int rank = comm_rank(gc);
+  const int rank = comm_rank(gc), width = width_;
   PhaseClock clock(build_phases_);
-  std::vector<EdgeRec> mine;
+  std::vector<EdgeRec<Id>> mine;
   std::vector<double> mine_vals;
   long long cut = route_edges(gc, owners, std::move(edges), std::move(edge_values), width, mine, mine_vals), gcut = 0;
   MPI_Allreduce(&cut, &gcut, 1, MPI_LONG_LONG, MPI_SUM, gc);
   edge_cut_ = gcut;
   clock.done("exchange");
-  const OwnedLists lists = neighbour_lists(owners, rank, std::move(mine), std::move(mine_vals), width);
+  const OwnedLists<Id> lists = neighbour_lists(owners, rank, std::move(mine), std::move(mine_vals), width);
   clock.done("lists");
   const std::vector<std::int64_t> order = local_order(lists, ordering, n_interior_);
   clock.done("order");
@@ -761,7 +794,7 @@ DistGraph::DistGraph(MPI_Comm comm, const OwnerDirectory& owners, std::vector<Gl
   clock.done("csr");
   // The build's temporaries at their largest (edge records, lists, ghosts).
   build_peak_bytes_ = std::max<std::int64_t>(lists.peak_bytes, static_cast<std::int64_t>(
-      lists.entries.capacity() * sizeof(Entry) + lists.vals.capacity() * sizeof(double) +
+      lists.entries.capacity() * sizeof(Entry<Id>) + lists.vals.capacity() * sizeof(double) +
       (lists.cnt.capacity() + lists.owned.capacity()) * 8 + lists.by_gid.capacity() * 4 +
       ghosts.capacity() * sizeof(Ghost) + ids.ghost_sorted.capacity() * sizeof(ids.ghost_sorted[0]) +
       ids.owned_to_local.capacity() * sizeof(LocalId) + order.capacity() * 8));

@@ -47,8 +47,10 @@ TEST(Halo, GhostsReceiveOwnersValues) {
 // other ranks start with no edges and receive thousands in each hop, more
 // than the room reserved after the records they keep (edge_capacity), so the
 // graph build's exchanges take their copying route too. Each owned node's
-// neighbours and values, in global-id order, against the edge list.
-TEST(DistGraph, EdgesHeldByOneRankReachTheirOwners) {
+// neighbours and values, in global-id order, against the edge list; with the
+// build's 32-bit ids (the default below 2^31 nodes) and its 64-bit ones
+// (SNL_SETUP_IDS=64).
+void check_edges_held_by_one_rank() {
   const int P = world_size(), me = world_rank();
   const GlobalId n = 4000;
   std::vector<int> owner(n);
@@ -84,4 +86,53 @@ TEST(DistGraph, EdgesHeldByOneRankReachTheirOwners) {
       EXPECT_EQ(g.edge_values()[2 * k + 1], -static_cast<double>(lo * 3 + hi));
     }
   }
+}
+
+TEST(DistGraph, EdgesHeldByOneRankReachTheirOwners) {
+  check_edges_held_by_one_rank();
+  setenv("SNL_SETUP_IDS", "64", 1);
+  check_edges_held_by_one_rank();
+  unsetenv("SNL_SETUP_IDS");
+}
+
+// The setup with 32-bit ids in its temporaries (the merge's rows, the graph
+// build's records and lists) and with 64-bit ones (SNL_SETUP_IDS=64), on a
+// network with sigmas and duplicate pairs (some written the other way
+// round): the same merge, local numbering, CSR, values, sigmas, interior,
+// cut and halo; the 64-bit build's temporaries are larger (so the switch took).
+TEST(DistGraph, ThirtyTwoAndSixtyFourBitIdsGiveTheSameGraph) {
+  Network w = make_network({.n = 600, .dim = 2, .radius = 0.09});
+  const std::size_t ne = w.sensor_ranges.size();
+  for (std::size_t e = 0; e < ne; ++e) w.sensor_sigmas.push_back(0.01 + 0.001 * (e % 5));
+  for (std::size_t e = 0; e < ne; e += 7) {  // every 7th pair again, reversed, with another range and sigma
+    w.sensor_edges.insert(w.sensor_edges.end(), {w.sensor_edges[2 * e + 1], w.sensor_edges[2 * e]});
+    w.sensor_ranges.push_back(w.sensor_ranges[e] * 1.01);
+    w.sensor_sigmas.push_back(0.02);
+  }
+  ProblemReport rn, rw;
+  LocalizationProblem narrow(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kBfs, &rn);
+  setenv("SNL_SETUP_IDS", "64", 1);
+  LocalizationProblem wide(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kBfs, &rw);
+  unsetenv("SNL_SETUP_IDS");
+  EXPECT_EQ(rn.merged.merged_sensor_pairs, static_cast<GlobalId>((ne + 6) / 7));
+  EXPECT_EQ(rw.merged.merged_sensor_pairs, rn.merged.merged_sensor_pairs);
+  EXPECT_EQ(rn.num_sensor_edges, static_cast<GlobalId>(ne));
+  EXPECT_TRUE(narrow.has_sensor_sigmas());
+  EXPECT_EQ(narrow.sensor_sigmas(), wide.sensor_sigmas());
+  DistGraph& a = narrow.graph();
+  DistGraph& b = wide.graph();
+  EXPECT_EQ(a.local_to_global(), b.local_to_global());
+  EXPECT_EQ(a.offsets(), b.offsets());
+  EXPECT_EQ(a.adjacency(), b.adjacency());
+  EXPECT_EQ(a.edge_values(), b.edge_values());
+  EXPECT_EQ(a.num_interior(), b.num_interior());
+  EXPECT_EQ(a.edge_cut(), b.edge_cut());
+  EXPECT_EQ(a.halo().memory_bytes(), b.halo().memory_bytes());
+  EXPECT_LT(a.build_peak_bytes(), b.build_peak_bytes());
+  if (world_size() > 1) EXPECT_GT(a.num_ghosts(), 0) << "no ghosts: the halo is not compared";
+  std::vector<double> fa(std::size_t(a.num_local()), -1.0), fb(std::size_t(b.num_local()), -2.0);
+  for (LocalId v = 0; v < a.num_owned(); ++v) fa[v] = fb[v] = double(a.global_id(v));
+  a.halo().exchange(fa.data(), 1);
+  b.halo().exchange(fb.data(), 1);
+  EXPECT_EQ(fa, fb);
 }

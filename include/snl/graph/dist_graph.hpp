@@ -172,6 +172,12 @@ enum class LocalOrdering { kRcm, kGlobalId };
 /// kRcm unless the environment sets SNL_LOCAL_ORDER=gid (for benchmarks).
 LocalOrdering default_local_ordering();
 
+/// Whether the setup's temporaries (the merge's rows, the graph build's
+/// records and lists) carry 64-bit node ids for a graph of n nodes: from 2^31
+/// nodes on, or where the environment sets SNL_SETUP_IDS=64 (for tests: both
+/// widths give the same problem). Below, 32-bit ids.
+bool setup_wide_ids(GlobalId n);
+
 class DistGraph {
  public:
   DistGraph() = default;
@@ -240,6 +246,11 @@ class DistGraph {
   LocalId owned_local(GlobalId g) const;
 
  private:
+  // The constructor's steps with node ids of type Id in its temporaries.
+  template <class Id>
+  void build(const OwnerDirectory& owners, std::vector<GlobalId>&& edges, std::vector<double>&& edge_values,
+             int halo_width, LocalOrdering ordering);
+
   // Declared first, so destroyed last: the halo's requests are freed before
   // the communicator they live on.
   DupComm comm_;
