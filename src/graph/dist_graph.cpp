@@ -29,9 +29,11 @@ LocalOrdering default_local_ordering() {
   return (e && std::strcmp(e, "gid") == 0) ? LocalOrdering::kGlobalId : LocalOrdering::kRcm;
 }
 
-bool setup_wide_ids(GlobalId n) {
+bool setup_wide_ids(MPI_Comm comm, GlobalId n) {
   const char* e = std::getenv("SNL_SETUP_IDS");
-  return n > std::numeric_limits<std::int32_t>::max() || (e && std::strcmp(e, "64") == 0);
+  int mine = (e && std::strcmp(e, "64") == 0) ? 1 : 0, any = 0;
+  MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_MAX, comm);
+  return n > std::numeric_limits<std::int32_t>::max() || any != 0;
 }
 
 namespace {
@@ -765,7 +767,7 @@ DistGraph::DistGraph(MPI_Comm comm, const OwnerDirectory& owners, std::vector<Gl
   // Below 2^31 nodes the build's records and lists carry 32-bit ids: at 10M
   // sensors on 2 ranks 8 bytes less per edge record and 4 per list entry
   // (docs/performance.md).
-  if (setup_wide_ids(n_global_))
+  if (setup_wide_ids(comm_.get(), n_global_))
     build<GlobalId>(owners, std::move(edges), std::move(edge_values), halo_width, ordering);
   else
     build<std::int32_t>(owners, std::move(edges), std::move(edge_values), halo_width, ordering);

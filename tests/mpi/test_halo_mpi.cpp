@@ -99,7 +99,8 @@ TEST(DistGraph, EdgesHeldByOneRankReachTheirOwners) {
 // build's records and lists) and with 64-bit ones (SNL_SETUP_IDS=64), on a
 // network with sigmas and duplicate pairs (some written the other way
 // round): the same merge, local numbering, CSR, values, sigmas, interior,
-// cut and halo; the 64-bit build's temporaries are larger (so the switch took).
+// cut and halo; the 64-bit build's temporaries are larger on every rank (so
+// the switch, set on rank 0 alone, took everywhere).
 TEST(DistGraph, ThirtyTwoAndSixtyFourBitIdsGiveTheSameGraph) {
   Network w = make_network({.n = 600, .dim = 2, .radius = 0.09});
   const std::size_t ne = w.sensor_ranges.size();
@@ -111,7 +112,7 @@ TEST(DistGraph, ThirtyTwoAndSixtyFourBitIdsGiveTheSameGraph) {
   }
   ProblemReport rn, rw;
   LocalizationProblem narrow(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kBfs, &rn);
-  setenv("SNL_SETUP_IDS", "64", 1);
+  if (world_rank() == 0) setenv("SNL_SETUP_IDS", "64", 1);  // on one rank: every rank must take 64 bits
   LocalizationProblem wide(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kBfs, &rw);
   unsetenv("SNL_SETUP_IDS");
   EXPECT_EQ(rn.merged.merged_sensor_pairs, static_cast<GlobalId>((ne + 6) / 7));

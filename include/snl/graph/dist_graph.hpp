@@ -174,9 +174,10 @@ LocalOrdering default_local_ordering();
 
 /// Whether the setup's temporaries (the merge's rows, the graph build's
 /// records and lists) carry 64-bit node ids for a graph of n nodes: from 2^31
-/// nodes on, or where the environment sets SNL_SETUP_IDS=64 (for tests: both
-/// widths give the same problem). Below, 32-bit ids.
-bool setup_wide_ids(GlobalId n);
+/// nodes on, or where the environment sets SNL_SETUP_IDS=64 on any rank (for
+/// tests: both widths give the same problem). Below, 32-bit ids. Collective,
+/// so that every rank takes the same width.
+bool setup_wide_ids(MPI_Comm comm, GlobalId n);
 
 class DistGraph {
  public:
