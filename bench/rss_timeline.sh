@@ -17,7 +17,7 @@ while kill -0 "$run" 2>/dev/null; do
   now=$(date +%s.%N)
   for p in $(pgrep -f "^$PATTERN" || true); do
     kib=$(awk '/^VmRSS/ {print $2}' "/proc/$p/status" 2>/dev/null || true)
-    [ -n "$kib" ] && printf '%.2f %s %s\n' "$(echo "$now - $t0" | bc)" "$p" "$kib"
+    [ -n "$kib" ] && awk -v a="$now" -v b="$t0" -v p="$p" -v k="$kib" 'BEGIN { printf "%.2f %s %s\n", a - b, p, k }'
   done
   sleep "$INTERVAL"
 done

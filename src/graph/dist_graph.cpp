@@ -314,9 +314,9 @@ void send_records(MPI_Comm comm, std::vector<Rec>&& recs, std::vector<double>&& 
 
 // Tags each record's b with its directory slot (ob, ib): looked up here when
 // b is in this rank's block, else asked of its block holder (the ids out and
-// the slots back, 8 + sizeof(Id) bytes per edge, where moving the records to the block
-// holder and on from there moved 32 + 8 width bytes and allocated a second
-// copy of them). Collective.
+// the slots back, 8 + sizeof(Id) bytes per edge, where moving the records to
+// the block holder and on from there moved the whole records with their
+// values and allocated a second copy of them). Collective.
 template <class Id>
 void tag_b(MPI_Comm comm, const OwnerDirectory& dir, std::vector<EdgeRec<Id>>& recs) {
   const int size = comm_size(comm);

@@ -50,7 +50,7 @@ TEST(Halo, GhostsReceiveOwnersValues) {
 // neighbours and values, in global-id order, against the edge list; with the
 // build's 32-bit ids (the default below 2^31 nodes) and its 64-bit ones
 // (SNL_SETUP_IDS=64).
-void check_edges_held_by_one_rank() {
+static void check_edges_held_by_one_rank() {
   const int P = world_size(), me = world_rank();
   const GlobalId n = 4000;
   std::vector<int> owner(n);
