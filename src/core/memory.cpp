@@ -1,7 +1,10 @@
 #include "snl/core/memory.hpp"
 
+#include <sys/mman.h>
+
 #include <cstdlib>
 #include <cstring>
+#include <new>
 #include <string>
 
 // glibc's malloc is the one tuned; a sanitizer replaces it with its own.
@@ -86,6 +89,17 @@ ReuseFreedMemory::~ReuseFreedMemory() {
   mallopt(M_TRIM_THRESHOLD, 128 * 1024);
   malloc_trim(0);
 #endif
+}
+
+void* map_pages(std::size_t bytes) {
+  if (bytes == 0) bytes = 1;  // an empty request still gets a page of its own: a unique pointer
+  void* p = mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+  if (p == MAP_FAILED) throw std::bad_alloc();
+  return p;
+}
+
+void unmap_pages(void* p, std::size_t bytes) noexcept {
+  if (p) munmap(p, bytes == 0 ? 1 : bytes);
 }
 
 }  // namespace snl

@@ -93,7 +93,7 @@ class LevelBisection {
 
   std::int64_t bytes() const {
     return static_cast<std::int64_t>(label_.capacity() * sizeof(Label) + level_.capacity() * 4 + frontier_.capacity() * 4 +
-                                     next_.capacity() * 4 + remote_.capacity() * sizeof(Remote) +
+                                     next_.capacity() * 4 + (remote_.capacity() + sent_.capacity()) * sizeof(Remote) +
                                      (sbuf_.capacity() + rbuf_.capacity()) * sizeof(Visit));
   }
 
@@ -140,6 +140,14 @@ class LevelBisection {
   };
   std::vector<Remote> remote_;
   std::size_t n_remote_ = 0;
+  // The visits to other blocks sent this pass, by (node, want), in a
+  // direct-mapped table: every neighbour of a node in this block reaches it
+  // (about 8 times per pass at degree 16 on 2 ranks), and its owner ignores
+  // every visit after the first (which marks it or finds it carrying another
+  // label for the rest of the pass). Lossy: a visit the table has forgotten
+  // is sent again, which changes nothing but the traffic.
+  static constexpr int kSentBits = 15;
+  std::vector<Remote> sent_;
   std::vector<Visit> sbuf_, rbuf_;
   std::vector<int> scount_, rcount_, sdisp_, rdisp_, sinfo_, rinfo_;
   MPI_Datatype visit_type_;
@@ -218,6 +226,8 @@ bool LevelBisection<Index, Label>::pass(const std::vector<GlobalId>& roots, cons
   std::int32_t* lev = level_.data();
   const std::int64_t* off = lx_.data();
   const Index* adj = ladj_.data();
+  sent_.assign(std::size_t{1} << kSentBits, Remote{-1, -1});
+  Remote* sent = sent_.data();
   for (std::size_t i = 0; i < nr; ++i)
     if (roots[i] >= first_ && roots[i] < first_ + nb_)
       visit(lab, lev, static_cast<std::int32_t>(roots[i] - first_), static_cast<std::int32_t>(3 * i + stage - 1),
@@ -247,10 +257,16 @@ bool LevelBisection<Index, Label>::pass(const std::vector<GlobalId>& roots, cons
       for (std::int64_t k = k0; k < k1; ++k) {
         const GlobalId u = static_cast<GlobalId>(adj[k]);
         const auto d = static_cast<std::uint64_t>(u - first_);
-        if (d < static_cast<std::uint64_t>(nb_))
+        if (d < static_cast<std::uint64_t>(nb_)) {
           visit(lab, lev, static_cast<std::int32_t>(d), want, lv);
-        else
-          rem[n_remote_++] = {u, want};
+          continue;
+        }
+        Remote& s = sent[(static_cast<std::uint64_t>(u) * 0x9E3779B97F4A7C15ULL ^
+                          static_cast<std::uint64_t>(want) * 0xC2B2AE3D27D4EB4FULL) >>
+                         (64 - kSentBits)];
+        if (s.u == u && s.want == want) continue;
+        s = {u, want};
+        rem[n_remote_++] = {u, want};
       }
     }
     if (!exchange(nf)) break;

@@ -1,10 +1,13 @@
 // ReuseFreedMemory (snl/core/memory.hpp): while alive, a large block comes from
 // the heap and stays there when freed; afterwards glibc maps large blocks again
-// and the free memory is returned.
+// and the free memory is returned. MappedAllocator's blocks stay out of the heap.
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <new>
+#include <vector>
 
 #include "snl/core/memory.hpp"
 
@@ -68,6 +71,33 @@ TEST(Memory, SystemOptOutLeavesTheAllocatorAlone) {
     big_free(p);
   }
   unsetenv("SNL_MALLOC");
+#endif
+}
+
+TEST(Memory, MappedAllocatorKeepsItsBlocksOutOfTheHeap) {
+  // Any C library: too large a count is refused, and an empty block is a block.
+  snl::MappedAllocator<double> alloc;
+  EXPECT_THROW(alloc.allocate(SIZE_MAX / 4), std::bad_alloc);
+  double* e = alloc.allocate(0);
+  EXPECT_NE(e, nullptr);
+  alloc.deallocate(e, 0);
+#if !defined(SNL_TEST_GLIBC_MALLOC)
+  GTEST_SKIP() << "not glibc's allocator (a sanitizer build or another C library): the heap is not observed";
+#else
+  unsetenv("SNL_MALLOC");
+  const snl::ReuseFreedMemory reuse;  // malloc maps nothing now: what it gives comes from the heap
+  const struct mallinfo2 before = mallinfo2();
+  {
+    std::vector<char, snl::MappedAllocator<char>> v(kBig, 1);
+    EXPECT_EQ(v[kBig - 1], 1);
+    const struct mallinfo2 during = mallinfo2();
+    EXPECT_LT(during.uordblks, before.uordblks + kBig / 2) << "the mapped vector came from the heap";
+    EXPECT_LT(during.arena, before.arena + kBig / 2) << "the mapped vector grew the heap";
+  }
+  {  // the control: the same vector with the default allocator does come from the heap
+    std::vector<char> w(kBig, 1);
+    EXPECT_GE(mallinfo2().uordblks, before.uordblks + kBig);
+  }
 #endif
 }
 

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "snl/core/common.hpp"
+#include "snl/core/memory.hpp"
 #include "snl/core/mpi_util.hpp"
 #include "snl/graph/halo.hpp"
 
@@ -104,7 +105,9 @@ class OwnerDirectory {
  private:
   DupComm comm_;
   GlobalId n_ = 0, begin_ = 0;
-  std::vector<Slot> slots_;
+  // Apart from malloc's heap: it lives through the graph build, whose larger
+  // temporaries reuse the room the partition freed around it (MappedAllocator).
+  std::vector<Slot, MappedAllocator<Slot>> slots_;
 };
 
 /// Collective. The owners of the nodes as a distributed directory. `edges`:
