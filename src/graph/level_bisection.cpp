@@ -141,11 +141,12 @@ class LevelBisection {
   std::vector<Remote> remote_;
   std::size_t n_remote_ = 0;
   // The visits to other blocks sent this pass, by (node, want), in a
-  // direct-mapped table: every neighbour of a node in this block reaches it
-  // (about 8 times per pass at degree 16 on 2 ranks), and its owner ignores
-  // every visit after the first (which marks it or finds it carrying another
-  // label for the rest of the pass). Lossy: a visit the table has forgotten
-  // is sent again, which changes nothing but the traffic.
+  // direct-mapped table: a node of another block is reached by each of its
+  // neighbours in this block (half of them on average at degree 16 on 2
+  // ranks, the numbering being random), and its owner ignores every visit
+  // after the first (which marks it, or finds it carrying another label for
+  // the rest of the pass). Lossy: a visit the table has forgotten is sent
+  // again, which changes nothing but the traffic.
   static constexpr int kSentBits = 15;
   std::vector<Remote> sent_;
   std::vector<Visit> sbuf_, rbuf_;

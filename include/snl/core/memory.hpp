@@ -54,7 +54,7 @@ void unmap_pages(void* p, std::size_t bytes) noexcept;
 /// such an array sits between blocks that are freed around it and splits
 /// their room in two, too small each for a later, larger temporary, which then
 /// takes fresh memory: at 10M sensors on 2 ranks the directory's 38 MiB cut
-/// 1381 MiB of freed room into 446 and 897, and the 916 MiB of the neighbour
+/// 1381 MiB of freed room into 446 and 897, and the 915.5 MiB of the neighbour
 /// lists' entries grew the heap (docs/performance.md).
 template <class T>
 struct MappedAllocator {
