@@ -71,8 +71,7 @@ int main(int argc, char** argv) {
   if (rank == 0) std::fprintf(stderr, "snl_setup_warm: not glibc's malloc; freed memory may leave the process\n");
 #endif
   try {
-    const snl::PartitionMethod pm =
-        snl::resolve_partition_method(comm, 0, snl::parse_partition_method(method));
+    const snl::PartitionMethod pm = snl::parse_partition_method(method);  // partition_nodes resolves `auto`
     for (int r = 0; r < reps; ++r) {
       MPI_Barrier(comm);
       const double t0 = MPI_Wtime();
