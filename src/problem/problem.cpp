@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <stdexcept>
 
 #include "snl/core/memory.hpp"
 #include "snl/core/mpi_util.hpp"
@@ -79,6 +80,8 @@ bool any_rank(MPI_Comm comm, bool mine) {
   MPI_Allreduce(&in, &out, 1, MPI_INT, MPI_MAX, comm);
   return out != 0;
 }
+
+bool all_ranks(MPI_Comm comm, bool mine) { return !any_rank(comm, !mine); }
 
 // Writes the rows this rank kept and those it received (counts per sender)
 // into m in rank order, its own rows in its place: the order of the rows
@@ -288,6 +291,63 @@ std::vector<GlobalId> flagged_sample(MPI_Comm comm, const DistGraph& graph, cons
 
 }  // namespace
 
+// A block holder's rows (`width` items each, one per node of its directory
+// block, ascending) to the owners of their nodes; returns this rank's owned
+// rows by local id. Each row goes where its directory slot says, without ids:
+// an owner receives from each block holder the rows of its nodes in that
+// block in ascending global id, and the blocks come in rank order, so the
+// rows arrive in the order of the owned nodes sorted by global id. (Asking
+// the holders for the rows, file_rows_to_owned, sends every owned node's id
+// there and back: at 10M on 2 ranks the step took 0.72-1.04 s that way and
+// takes 0.33-0.43 s so, docs/performance.md.) The rows this rank owns are
+// copied into place, not sent to itself. Collective.
+template <class T>
+std::vector<T> push_block_rows(MPI_Comm comm, const OwnerDirectory& dir, const DistGraph& graph, const T* rows,
+                               int width, MPI_Datatype type) {
+  const int size = comm_size(comm), rank = comm_rank(comm);
+  const auto w = static_cast<std::size_t>(width);
+  const GlobalId b = dir.block_begin(), e = dir.block_end();
+  std::vector<std::int64_t> cnt(static_cast<std::size_t>(size), 0), rcnt(static_cast<std::size_t>(size));
+  for (GlobalId g = b; g < e; ++g) ++cnt[dir.local(g).owner];
+  MPI_Alltoall(cnt.data(), 1, MPI_INT64_T, rcnt.data(), 1, MPI_INT64_T, comm);
+  std::int64_t stot = 0, rtot = 0;
+  for (int r = 0; r < size; ++r) {
+    stot += cnt[r];
+    rtot += rcnt[r];
+  }
+  if (!all_ranks(comm, stot * width <= INT32_MAX && rtot * width <= INT32_MAX))
+    throw Error("owned rows: more than 2^31 items on one rank; use more ranks");
+  std::vector<int> scount(size), sdisp(size), rcount(size), rdisp(size);
+  for (int r = 0, s = 0, t = 0; r < size; ++r) {
+    scount[r] = r == rank ? 0 : static_cast<int>(cnt[r] * width);
+    rcount[r] = r == rank ? 0 : static_cast<int>(rcnt[r] * width);
+    sdisp[r] = s;
+    rdisp[r] = t;  // this rank's own segment keeps its place among the others
+    s += scount[r];
+    t += static_cast<int>(rcnt[r] * width);
+  }
+  std::vector<T> sbuf(static_cast<std::size_t>(stot - cnt[rank]) * w), seq(static_cast<std::size_t>(rtot) * w);
+  {
+    std::vector<int> at(sdisp);
+    at[rank] = rdisp[rank];
+    for (GlobalId g = b; g < e; ++g) {
+      const int o = dir.local(g).owner;
+      T* dst = (o == rank ? seq.data() : sbuf.data()) + at[o];
+      std::copy(rows + static_cast<std::size_t>(g - b) * w, rows + static_cast<std::size_t>(g - b + 1) * w, dst);
+      at[o] += width;
+    }
+  }
+  MPI_Alltoallv(sbuf.data(), scount.data(), sdisp.data(), type, seq.data(), rcount.data(), rdisp.data(), type, comm);
+  const auto& by_gid = graph.owned_by_global_id();
+  if (by_gid.size() * w != seq.size()) throw std::logic_error("owned rows: the directory and the graph disagree");
+  std::vector<T> owned(seq.size());
+  for (std::size_t t = 0; t < by_gid.size(); ++t) {
+    const auto v = static_cast<std::size_t>(by_gid[t].second);
+    std::copy(seq.data() + t * w, seq.data() + (t + 1) * w, owned.data() + v * w);
+  }
+  return owned;
+}
+
 // The body runs collectives from start to end: a failure that only some ranks
 // see (std::bad_alloc, a bug) cannot be agreed on without a hang, so it aborts
 // every rank (abort_on_local_failure); snl::Error is agreed and propagates.
@@ -354,7 +414,7 @@ void LocalizationProblem::build(MPI_Comm comm, const Network& slab, Network* con
   count_ghosts(comm, graph_, rep.partition);
   has_anchor_sigmas_ = m.has_asigmas;
   distribute_anchors(comm, owners, m.aedges, m.aranges, m.asigmas);
-  read_owned_rows(comm, slab);
+  read_owned_rows(comm, owners, slab);
   clock.done("anchors");
   const std::vector<std::uint8_t> unanchored = unanchored_owned(comm);
   clock.done("connectivity");
@@ -395,13 +455,28 @@ void LocalizationProblem::distribute_anchors(MPI_Comm comm, const OwnerDirectory
   for (LocalId v = 0; v < n_owned; ++v) anchor_offsets_[v + 1] += anchor_offsets_[v];
 }
 
-// Step 5: truth and the file's localizability flags to the owners.
-void LocalizationProblem::read_owned_rows(MPI_Comm comm, const Network& slab) {
+// Step 5: truth and the file's localizability flags to the owners. Where
+// every rank's slab holds the rows of its directory block (as read_network
+// and network_slab deal them), the rows are pushed by the block holders
+// (push_block_rows); other slabs ask the holders of the rows
+// (file_rows_to_owned).
+void LocalizationProblem::read_owned_rows(MPI_Comm comm, const OwnerDirectory& owners, const Network& slab) {
   const LocalId n_owned = graph_.num_owned();
-  if (has_truth_) truth_ = file_rows_to_owned(slab.truth, slab.sensor_row_offset, dim_);
-  flags_.assign(static_cast<std::size_t>(n_owned), 0);
+  const auto nb = static_cast<std::size_t>(owners.block_end() - owners.block_begin());
   int file_has_flags = slab.localizability.empty() ? 0 : 1, any = 0;
   MPI_Allreduce(&file_has_flags, &any, 1, MPI_INT, MPI_MAX, comm);
+  const bool block_slab =
+      all_ranks(comm, slab.sensor_row_offset == owners.block_begin() &&
+                          (!has_truth_ || slab.truth.size() == nb * static_cast<std::size_t>(dim_)) &&
+                          (!any || slab.localizability.size() == nb));
+  if (block_slab) {
+    if (has_truth_) truth_ = push_block_rows(comm, owners, graph_, slab.truth.data(), dim_, MPI_DOUBLE);
+    flags_ = any ? push_block_rows(comm, owners, graph_, slab.localizability.data(), 1, MPI_UINT8_T)
+                 : std::vector<std::uint8_t>(static_cast<std::size_t>(n_owned), 0);
+    return;
+  }
+  if (has_truth_) truth_ = file_rows_to_owned(slab.truth, slab.sensor_row_offset, dim_);
+  flags_.assign(static_cast<std::size_t>(n_owned), 0);
   if (any) {
     std::vector<double> f(slab.localizability.begin(), slab.localizability.end());
     auto owned_f = file_rows_to_owned(f, slab.sensor_row_offset, 1);

@@ -117,6 +117,46 @@ TEST(Problem, SortedAndReversedRowsGiveTheSameProblem) {
     }
 }
 
+// Truth and the file's flags reach the owners of their sensors: pushed by
+// the block holders where every slab holds its directory block's rows (as
+// network_slab deals them), asked for where one rank holds every row. Both
+// against the whole network, row by row, on bfs and METIS partitions.
+TEST(Problem, TruthAndFlagsReachTheOwnersFromAnySlab) {
+  const int rank = world_rank();
+  NetSpec s;
+  s.n = 3000;  // a directory block of over a thousand rows per rank
+  s.radius = 0.05;
+  Network w = make_network(s);
+  w.localizability.assign(static_cast<std::size_t>(w.num_sensors), 0);
+  for (GlobalId g = 0; g < w.num_sensors; g += 3) w.localizability[g] = kNotRigid;  // a bit no test of the setup sets
+  Network on_root = rank == 0 ? w : Network{};
+  if (rank != 0) {  // an empty slab after every row
+    on_root.dim = w.dim;
+    on_root.num_sensors = w.num_sensors;
+    on_root.anchors = w.anchors;
+    on_root.sigma = w.sigma;
+    on_root.has_truth = true;
+    on_root.sensor_edge_offset = w.local_sensor_edges();
+    on_root.anchor_edge_offset = w.local_anchor_edges();
+    on_root.sensor_row_offset = w.num_sensors;
+  }
+  for (const PartitionMethod pm : {PartitionMethod::kBfs, PartitionMethod::kMetis})
+    for (const Network* slab : {&w, &on_root}) {
+      const LocalizationProblem prob(MPI_COMM_WORLD, slab == &w ? slab_of(w, MPI_COMM_WORLD) : on_root, pm, nullptr);
+      const auto n_owned = static_cast<std::size_t>(prob.graph().num_owned());
+      EXPECT_EQ(prob.truth().size(), n_owned * 2);  // (no ASSERT: the other ranks go on to collectives)
+      EXPECT_EQ(prob.flags().size(), n_owned);
+      int bad = 0;
+      for (LocalId v = 0; v < prob.graph().num_owned() && prob.truth().size() == n_owned * 2 &&
+                          prob.flags().size() == n_owned; ++v) {
+        const GlobalId g = prob.graph().global_id(v);
+        bad += prob.truth()[2 * v] != w.truth[2 * g] || prob.truth()[2 * v + 1] != w.truth[2 * g + 1];
+        bad += (prob.flags()[v] & kNotRigid) != w.localizability[g];
+      }
+      EXPECT_EQ(bad, 0) << "rank " << rank << (slab == &w ? ", block slabs" : ", every row on rank 0");
+    }
+}
+
 // The serial twin of the partition's graph: every pair's two half-edges
 // counted, scattered and each row sorted, on the whole pair list at once.
 static void reference_root_csr(GlobalId n, const std::vector<GlobalId>& pairs, std::vector<std::int64_t>& xadj,

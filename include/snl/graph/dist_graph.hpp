@@ -248,6 +248,8 @@ class DistGraph {
   /// Map of owned global id -> local id, by binary search over the owned
   /// nodes (kept sorted in owned_sorted_). Returns -1 if not owned.
   LocalId owned_local(GlobalId g) const;
+  /// The owned nodes as (global id, local id), ascending in global id.
+  const std::vector<std::pair<GlobalId, LocalId>>& owned_by_global_id() const { return owned_sorted_; }
 
  private:
   // The constructor's steps with node ids of type Id in its temporaries.

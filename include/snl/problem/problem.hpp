@@ -101,7 +101,7 @@ class LocalizationProblem {
   void build(MPI_Comm comm, const Network& slab, Network* consumed, PartitionMethod method, ProblemReport* report);
   void distribute_anchors(MPI_Comm comm, const OwnerDirectory& owners, const std::vector<GlobalId>& aedges,
                           const std::vector<double>& aranges, const std::vector<double>& asigmas);
-  void read_owned_rows(MPI_Comm comm, const Network& slab);
+  void read_owned_rows(MPI_Comm comm, const OwnerDirectory& owners, const Network& slab);
   std::vector<std::uint8_t> unanchored_owned(MPI_Comm comm);
   void flag_sensors(MPI_Comm comm, const std::vector<std::uint8_t>& unanchored, ProblemReport& rep);
   int dim_ = 2;
