@@ -25,6 +25,18 @@ int comm_size(MPI_Comm comm) {
   return s;
 }
 
+bool all_ranks(MPI_Comm comm, bool mine) {
+  int in = mine ? 1 : 0, out = 0;
+  MPI_Allreduce(&in, &out, 1, MPI_INT, MPI_MIN, comm);
+  return out == 1;
+}
+
+bool any_rank(MPI_Comm comm, bool mine) {
+  int in = mine ? 1 : 0, out = 0;
+  MPI_Allreduce(&in, &out, 1, MPI_INT, MPI_MAX, comm);
+  return out != 0;
+}
+
 DupComm::DupComm(MPI_Comm comm) { MPI_Comm_dup(comm, &comm_); }
 
 DupComm::~DupComm() {

@@ -281,13 +281,6 @@ struct HalfRow {
 
 using detail::Blocks;
 
-// Whether ok holds on every rank (collective).
-bool all_ranks(MPI_Comm comm, bool ok) {
-  int mine = ok ? 1 : 0, all = 0;
-  MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, comm);
-  return all == 1;
-}
-
 // root_csr, step 1: each pair's two half-edges to the block holders of their
 // nodes; those of this rank's block stay (keep), the others are packed by
 // destination and exchanged (got). Collective; "" or why not.

@@ -74,15 +74,6 @@ struct Measurements {
   std::vector<double> ssigmas, asigmas;
 };
 
-// Whether some rank's slab holds the dataset (a rank may hold no rows of it).
-bool any_rank(MPI_Comm comm, bool mine) {
-  int in = mine ? 1 : 0, out = 0;
-  MPI_Allreduce(&in, &out, 1, MPI_INT, MPI_MAX, comm);
-  return out != 0;
-}
-
-bool all_ranks(MPI_Comm comm, bool mine) { return !any_rank(comm, !mine); }
-
 // Writes the rows this rank kept and those it received (counts per sender)
 // into m in rank order, its own rows in its place: the order of the rows
 // sent to itself, so that a sorted network file (each rank's slab a range
@@ -315,8 +306,9 @@ std::vector<T> push_block_rows(MPI_Comm comm, const OwnerDirectory& dir, const D
     stot += cnt[r];
     rtot += rcnt[r];
   }
-  if (!all_ranks(comm, stot * width <= INT32_MAX && rtot * width <= INT32_MAX))
-    throw Error("owned rows: more than 2^31 items on one rank; use more ranks");
+  agree(comm, stot * width <= INT32_MAX && rtot * width <= INT32_MAX
+                  ? ""
+                  : "owned rows: more than 2^31 items on one rank; use more ranks");
   std::vector<int> scount(size), sdisp(size), rcount(size), rdisp(size);
   for (int r = 0, s = 0, t = 0; r < size; ++r) {
     scount[r] = r == rank ? 0 : static_cast<int>(cnt[r] * width);

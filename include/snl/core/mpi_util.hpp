@@ -16,6 +16,10 @@ namespace snl {
 int comm_rank(MPI_Comm comm);
 int comm_size(MPI_Comm comm);
 
+/// Collective: whether `mine` holds on every rank / on some rank.
+bool all_ranks(MPI_Comm comm, bool mine);
+bool any_rank(MPI_Comm comm, bool mine);
+
 /// A private duplicate of a communicator (MPI_Comm_dup, as PetscCommDuplicate
 /// does), freed once by its owner: messages an object sends on it cannot match
 /// the caller's traffic on the original, whatever the tags. Move-only; a move
