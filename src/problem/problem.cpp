@@ -289,8 +289,8 @@ std::vector<GlobalId> flagged_sample(MPI_Comm comm, const DistGraph& graph, cons
 // block in ascending global id, and the blocks come in rank order, so the
 // rows arrive in the order of the owned nodes sorted by global id. (Asking
 // the holders for the rows, file_rows_to_owned, sends every owned node's id
-// there and back: at 10M on 2 ranks the step took 0.72-1.04 s that way and
-// takes 0.33-0.43 s so, docs/performance.md.) The rows this rank owns are
+// there and back: about twice the time at 10M on 2 ranks, docs/performance.md,
+// "Owned rows pushed by their block holders".) The rows this rank owns are
 // copied into place, not sent to itself. Collective.
 template <class T>
 std::vector<T> push_block_rows(MPI_Comm comm, const OwnerDirectory& dir, const DistGraph& graph, const T* rows,
@@ -455,8 +455,7 @@ void LocalizationProblem::distribute_anchors(MPI_Comm comm, const OwnerDirectory
 void LocalizationProblem::read_owned_rows(MPI_Comm comm, const OwnerDirectory& owners, const Network& slab) {
   const LocalId n_owned = graph_.num_owned();
   const auto nb = static_cast<std::size_t>(owners.block_end() - owners.block_begin());
-  int file_has_flags = slab.localizability.empty() ? 0 : 1, any = 0;
-  MPI_Allreduce(&file_has_flags, &any, 1, MPI_INT, MPI_MAX, comm);
+  const bool any = any_rank(comm, !slab.localizability.empty());  // the file has flags
   const bool block_slab =
       all_ranks(comm, slab.sensor_row_offset == owners.block_begin() &&
                           (!has_truth_ || slab.truth.size() == nb * static_cast<std::size_t>(dim_)) &&
