@@ -1,14 +1,16 @@
 """Rows of a bench/setup_warm_ab.sh record file: per run (build, pair) and
-repetition, the setup and its phases in seconds, the graph build's temporaries
+repetition, the setup and its phases in seconds (0.00: a phase the build does
+not have), the graph build's temporaries
 and the peak RSS (largest rank), then per build the range over the first
 repetitions (fresh memory) and over the later ones (warm pages).
     /usr/bin/python3 bench/setup_warm_rows.py W/warm.jsonl"""
 import json
 import sys
 
-COLS = [("merge", "merge"), ("partition.bfs_graph", "partition's graph"), ("partition.bfs", "bfs passes"),
-        ("graph.exchange", "exchange"), ("graph.lists", "lists"), ("graph.order", "order"), ("graph.csr", "csr"),
-        ("anchors", "anchors"), ("connectivity", "connectivity")]
+COLS = [("merge", "merge"), ("rows", "rows"), ("partition.bfs_graph", "partition's graph"),
+        ("partition.bfs", "bfs passes"), ("graph.slots", "slots"), ("graph.exchange", "exchange"),
+        ("graph.lists", "lists"), ("graph.order", "order"), ("graph.csr", "csr"), ("anchors", "anchors"),
+        ("connectivity", "connectivity")]
 
 
 def main(path):

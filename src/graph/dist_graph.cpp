@@ -5,6 +5,7 @@
 #include <cstring>
 #include <limits>
 #include <numeric>
+#include <stdexcept>
 
 #include "graph/partition_detail.hpp"
 #include "snl/core/mpi_util.hpp"
@@ -51,13 +52,6 @@ inline void copy_values(const double* src, double* dst, int width) {
   }
 }
 
-// An edge with the owner and owner-side index of both ends (OwnerDirectory::Slot).
-// Id: the node ids' type, 32-bit below 2^31 nodes (DistGraph::build).
-template <class Id>
-struct EdgeRec {
-  Id a, b;
-  std::int32_t oa, ia, ob, ib;
-};
 // One neighbour of an owned node: its global id and directory slot
 // (OwnerDirectory::Slot), so that no later pass reads the edge records again.
 template <class Id>
@@ -262,179 +256,6 @@ class PhaseClock {
   double mark_;
 };
 
-// Moves records (with `width` values each) to the rank dest(k) returns for
-// record k, and also to also(k) where that is another rank (-1: none);
-// returns in `got` what this rank keeps (k order) and then what it received
-// (rank order, then k order), values alongside. Consumes recs and vals. The
-// records that stay on this rank are not copied out and back: they are
-// moved to the head of recs in place, whose storage becomes `got`; only the
-// others are packed into a send buffer in rank order (at 10M on 2 ranks half
-// of the records, where all of them went through the send buffer and
-// MPI's copy to self before). dest and also are called twice per record
-// (count, then pack): they must be cheap.
-template <class Rec, class Dest, class Also>
-void send_records(MPI_Comm comm, std::vector<Rec>&& recs, std::vector<double>&& vals, int width, Dest&& dest,
-                  Also&& also, std::vector<Rec>& got, std::vector<double>& got_vals) {
-  const int size = comm_size(comm), rank = comm_rank(comm);
-  const auto w = static_cast<std::size_t>(width);
-  std::vector<std::int64_t> start(static_cast<std::size_t>(size) + 1, 0);
-  for (std::size_t k = 0; k < recs.size(); ++k) {
-    const int r = dest(k), r2 = also(k);
-    if (r != rank) ++start[r + 1];
-    if (r2 >= 0 && r2 != r && r2 != rank) ++start[r2 + 1];
-  }
-  std::vector<int> scount, vcount(size);
-  pack_offsets(start, scount, width, "edge exchange");
-  for (int r = 0; r < size; ++r) vcount[r] = scount[r] * width;
-  std::vector<Rec> sbuf(static_cast<std::size_t>(start[size]));
-  std::vector<double> svals(sbuf.size() * w);
-  auto put = [&](int r, std::size_t k) {
-    const auto pos = start[r]++;
-    sbuf[pos] = recs[k];
-    copy_values(vals.data() + k * w, svals.data() + pos * w, width);
-  };
-  std::size_t kept = 0;  // records [0, kept) stay here; kept <= k, so record k is read before it is overwritten
-  for (std::size_t k = 0; k < recs.size(); ++k) {
-    const int r = dest(k), r2 = also(k);
-    if (r != rank) put(r, k);
-    if (r2 >= 0 && r2 != r && r2 != rank) put(r2, k);
-    if (r != rank && r2 != rank) continue;
-    if (kept != k) {
-      recs[kept] = recs[k];
-      copy_values(vals.data() + k * w, vals.data() + kept * w, width);
-    }
-    ++kept;
-  }
-  got = std::move(recs);
-  got_vals = std::move(vals);
-  exchange_packed_into(comm, sbuf, scount, got, kept);
-  release(sbuf);
-  exchange_packed_into(comm, svals, vcount, got_vals, kept * w);
-}
-
-// Tags each record's b with its directory slot (ob, ib): looked up here when
-// b is in this rank's block, else asked of its block holder (the ids out and
-// the slots back, 8 + sizeof(Id) bytes per edge, where moving the records to
-// the block holder and on from there moved the whole records with their
-// values and allocated a second copy of them). Collective.
-template <class Id>
-void tag_b(MPI_Comm comm, const OwnerDirectory& dir, std::vector<EdgeRec<Id>>& recs) {
-  const int size = comm_size(comm);
-  const detail::Blocks blocks(dir.num_global(), size);
-  auto mine = [&](GlobalId g) { return g >= dir.block_begin() && g < dir.block_end(); };
-  std::vector<std::int64_t> start(static_cast<std::size_t>(size) + 1, 0);
-  for (const auto& e : recs)
-    if (!mine(e.b)) ++start[blocks.of(e.b) + 1];
-  std::vector<int> scount;
-  pack_offsets(start, scount, 1, "directory lookup");
-  std::vector<std::int64_t> first(start.begin(), start.end() - 1);
-  std::vector<Id> ask(static_cast<std::size_t>(start[size]));
-  constexpr std::size_t kAhead = 16;  // directory lookups in flight (OwnerDirectory::prefetch)
-  for (std::size_t k = 0; k < recs.size(); ++k) {
-    if (k + kAhead < recs.size() && mine(recs[k + kAhead].b)) dir.prefetch(recs[k + kAhead].b);
-    auto& e = recs[k];
-    if (!mine(e.b)) {
-      ask[start[blocks.of(e.b)]++] = e.b;
-      continue;
-    }
-    const auto& s = dir.local(e.b);
-    e.ob = s.owner;
-    e.ib = s.index;
-  }
-  // The questions to their block holders, the answers back in the same order.
-  std::vector<int> rcount(size), sdisp(size), rdisp(size);
-  MPI_Alltoall(scount.data(), 1, MPI_INT, rcount.data(), 1, MPI_INT, comm);
-  std::int64_t rtot = 0;
-  for (int r = 0; r < size; ++r) {
-    sdisp[r] = static_cast<int>(first[r]);
-    rdisp[r] = static_cast<int>(rtot);
-    rtot += rcount[r];
-  }
-  int ok = rtot <= INT32_MAX && start[size] <= INT32_MAX, all_ok = 0;
-  MPI_Allreduce(&ok, &all_ok, 1, MPI_INT, MPI_MIN, comm);
-  if (!all_ok) throw Error("directory lookup: more than 2^31 ids on one rank; use more ranks");
-  std::vector<Id> asked(static_cast<std::size_t>(rtot));
-  const MPI_Datatype id_type = sizeof(Id) == 4 ? MPI_INT32_T : MPI_INT64_T;
-  MPI_Alltoallv(ask.data(), scount.data(), sdisp.data(), id_type, asked.data(), rcount.data(), rdisp.data(), id_type,
-                comm);
-  release(ask);
-  std::vector<OwnerDirectory::Slot> answer(asked.size());
-  for (std::size_t k = 0; k < asked.size(); ++k) {
-    if (k + kAhead < asked.size()) dir.prefetch(asked[k + kAhead]);
-    answer[k] = dir.local(asked[k]);
-  }
-  release(asked);
-  std::vector<OwnerDirectory::Slot> got(static_cast<std::size_t>(start[size]));
-  MPI_Datatype slot_type;
-  MPI_Type_contiguous(2, MPI_INT32_T, &slot_type);
-  MPI_Type_commit(&slot_type);
-  MPI_Alltoallv(answer.data(), rcount.data(), rdisp.data(), slot_type, got.data(), scount.data(), sdisp.data(),
-                slot_type, comm);
-  MPI_Type_free(&slot_type);
-  release(answer);
-  for (auto& e : recs)
-    if (!mine(e.b)) {
-      const auto& s = got[first[blocks.of(e.b)]++];
-      e.ob = s.owner;
-      e.ib = s.index;
-    }
-}
-
-// Step 1: every edge goes to the owners of both ends (once if they
-// coincide), with its `width` values and both ends' directory slots. None of
-// it needs anything of size n: the records go to the block holder of a
-// (skipped when every rank holds only edges with an end in its block, as
-// the problem's merged measurements are; that end is then a), which tags a's
-// owner, asks the block holder of b for b's (tag_b), counts the cut and
-// sends them to the owners. Edges are undirected: a and b may swap. Returns
-// the local edge cut. Consumes edges and edge_values (freed once the first
-// records are built).
-template <class Id>
-GlobalId route_edges(MPI_Comm comm, const OwnerDirectory& dir, std::vector<GlobalId>&& edges,
-                     std::vector<double>&& edge_values, int width, std::vector<EdgeRec<Id>>& mine,
-                     std::vector<double>& mine_vals) {
-  const detail::Blocks blocks(dir.num_global(), comm_size(comm));
-  auto none = [](std::size_t) { return -1; };
-  std::vector<EdgeRec<Id>> recs;
-  std::vector<double> vals;
-  {
-    int local = 1, all = 0;
-    auto in_block = [&](GlobalId g) { return g >= dir.block_begin() && g < dir.block_end(); };
-    for (std::size_t k = 0; k < edges.size() && local; k += 2) local = in_block(edges[k]) || in_block(edges[k + 1]);
-    MPI_Allreduce(&local, &all, 1, MPI_INT, MPI_MIN, comm);
-    std::vector<EdgeRec<Id>> pairs;
-    pairs.reserve(edge_capacity(edges.size() / 2));  // send_records receives after the records it keeps
-    pairs.resize(edges.size() / 2);
-    std::vector<double> pair_vals = std::move(edge_values);
-    for (std::size_t e = 0; e < pairs.size(); ++e) {
-      const bool swap = all && !in_block(edges[2 * e]);
-      pairs[e] = {static_cast<Id>(edges[2 * e + (swap ? 1 : 0)]), static_cast<Id>(edges[2 * e + (swap ? 0 : 1)]),
-                  -1, -1, -1, -1};
-    }
-    release(edges);
-    if (all) {
-      recs = std::move(pairs);
-      vals = std::move(pair_vals);
-    } else {
-      send_records(comm, std::move(pairs), std::move(pair_vals), width,
-                   [&](std::size_t k) { return blocks.of(pairs[k].a); }, none, recs, vals);
-    }
-  }
-  constexpr std::size_t kAhead = 16;  // directory lookups in flight (OwnerDirectory::prefetch)
-  for (std::size_t k = 0; k < recs.size(); ++k) {
-    if (k + kAhead < recs.size()) dir.prefetch(recs[k + kAhead].a);
-    const auto& s = dir.local(recs[k].a);
-    recs[k].oa = s.owner;
-    recs[k].ia = s.index;
-  }
-  tag_b(comm, dir, recs);
-  GlobalId cut = 0;
-  for (const auto& e : recs) cut += e.oa != e.ob;
-  send_records(comm, std::move(recs), std::move(vals), width, [&](std::size_t k) { return recs[k].oa; },
-               [&](std::size_t k) { return recs[k].ob; }, mine, mine_vals);
-  return cut;
-}
-
 // The owned nodes and their neighbour lists, indexed by position in `owned`
 // (the directory's owner-side index), before the local numbering.
 template <class Id>
@@ -451,125 +272,311 @@ struct OwnedLists {
   std::int32_t nbr_index(std::int64_t k) const { return entries[k].index; }
 };
 
-// Sorts node v's entries [b, e) (and their values) by neighbour global id:
-// insertion sort for the usual few, an index sort for hubs.
+// Step 1a: the directory slots of the rows' neighbours outside this rank's
+// block. From a block that the rows name at least half as often as it has
+// nodes, its whole block of slots (no ids sent: at 10M on 2 ranks each rank
+// names the other's 5M nodes 40M times); from the others, the slots of the
+// named ids, asked in the order the pack reads them (at(u) hands them out in
+// that order). Collective.
 template <class Id>
-void sort_by_neighbour(OwnedLists<Id>& L, std::int64_t b, std::int64_t e, std::vector<double>& tmp,
-                       std::vector<std::int64_t>& perm) {
-  const int w = L.width;
-  Entry<Id>* ent = L.entries.data();
-  double* val = L.vals.data();
-  if (e - b <= 32) {
-    for (std::int64_t i = b + 1; i < e; ++i) {
-      if (!(ent[i].nbr < ent[i - 1].nbr)) continue;
-      const Entry<Id> x = ent[i];
-      copy_values(val + i * w, tmp.data(), w);
-      std::int64_t j = i;
-      for (; j > b && x.nbr < ent[j - 1].nbr; --j) {
-        ent[j] = ent[j - 1];
-        copy_values(val + (j - 1) * w, val + j * w, w);
-      }
-      ent[j] = x;
-      copy_values(tmp.data(), val + j * w, w);
-    }
-    return;
+class NeighbourSlots {
+ public:
+  NeighbourSlots(MPI_Comm comm, const OwnerDirectory& dir, const std::vector<Id>& nbr)
+      : dir_(dir), blocks_(dir.num_global(), comm_size(comm)), rank_(comm_rank(comm)) {
+    const int size = blocks_.size();
+    refs_.assign(static_cast<std::size_t>(size), 0);
+    for (const Id u : nbr) ++refs_[blocks_.of(static_cast<GlobalId>(u))];
+    dense_.assign(static_cast<std::size_t>(size), 0);
+    for (int r = 0; r < size; ++r)
+      dense_[r] = r != rank_ && 2 * refs_[r] >= blocks_.first[r + 1] - blocks_.first[r];
+    const char* e = std::getenv("SNL_SETUP_SLOTS");  // tests: "ask" or "block" for every block
+    if (e && std::strcmp(e, "ask") == 0) std::fill(dense_.begin(), dense_.end(), 0);
+    if (e && std::strcmp(e, "block") == 0)
+      for (int r = 0; r < size; ++r) dense_[r] = r != rank_;
   }
-  perm.resize(static_cast<std::size_t>(e - b));
-  std::iota(perm.begin(), perm.end(), b);
-  std::sort(perm.begin(), perm.end(), [&](std::int64_t x, std::int64_t y) { return ent[x].nbr < ent[y].nbr; });
-  std::vector<Entry<Id>> se(perm.size());
-  std::vector<double> sv(perm.size() * w);
-  for (std::size_t t = 0; t < perm.size(); ++t) {
-    se[t] = ent[perm[t]];
-    copy_values(val + perm[t] * w, sv.data() + t * w, w);
+  bool asks() const {
+    for (int r = 0; r < blocks_.size(); ++r)
+      if (r != rank_ && !dense_[r] && refs_[r] > 0) return true;
+    return false;
   }
-  std::copy(se.begin(), se.end(), ent + b);
-  std::copy(sv.begin(), sv.end(), val + b * w);
+  // Whether u's slot must be asked for: what ask() records, in pack order.
+  bool asked(GlobalId u, int& r) const {
+    r = blocks_.of(u);
+    return r != rank_ && !dense_[r];
+  }
+  // The exchange: `ask[r]` holds the ids asked of block r, in pack order.
+  void exchange(MPI_Comm comm, std::vector<std::vector<Id>>& ask);
+  // u's slot; asked ids are answered in the order they were asked.
+  const OwnerDirectory::Slot& at(GlobalId u) {
+    const int r = blocks_.of(u);
+    if (r == rank_) return dir_.local(u);
+    if (dense_[r]) return got_[static_cast<std::size_t>(from_[r] + (u - blocks_.first[r]))];
+    return got_[static_cast<std::size_t>(from_[r] + next_[r]++)];
+  }
+  // Where u's slot will be read (for a prefetch; asked slots are read in
+  // order, so any address does). The caller issues the prefetch: GCC found a
+  // member function around it pure and dropped the call.
+  const void* address(GlobalId u) const {
+    const int r = blocks_.of(u);
+    if (r == rank_) return &dir_.local(u);
+    return got_.data() + from_[r] + (dense_[r] ? (u - blocks_.first[r]) : next_[r]);
+  }
+  std::int64_t memory_bytes() const { return static_cast<std::int64_t>(got_.capacity() * sizeof(got_[0])); }
+
+ private:
+  const OwnerDirectory& dir_;
+  detail::Blocks blocks_;
+  int rank_;
+  std::vector<std::int64_t> refs_, from_, next_;
+  std::vector<char> dense_;
+  std::vector<OwnerDirectory::Slot> got_;
+};
+
+template <class Id>
+void NeighbourSlots<Id>::exchange(MPI_Comm comm, std::vector<std::vector<Id>>& ask) {
+  const int size = blocks_.size();
+  // Per pair: whether the whole block is wanted, and how many ids are asked.
+  std::vector<std::int64_t> want(2 * static_cast<std::size_t>(size)), wanted(want.size());
+  for (int r = 0; r < size; ++r) {
+    want[2 * r] = dense_[r];
+    want[2 * r + 1] = static_cast<std::int64_t>(ask[r].size());
+  }
+  MPI_Alltoall(want.data(), 2, MPI_INT64_T, wanted.data(), 2, MPI_INT64_T, comm);
+  std::vector<std::int64_t> qstart(static_cast<std::size_t>(size) + 1, 0);
+  for (int r = 0; r < size; ++r) qstart[r + 1] = static_cast<std::int64_t>(ask[r].size());
+  std::vector<int> qcount;
+  pack_offsets(qstart, qcount, 1, "neighbour slots");
+  std::vector<Id> qbuf;
+  qbuf.reserve(static_cast<std::size_t>(qstart[size]));
+  for (auto& a : ask) {
+    qbuf.insert(qbuf.end(), a.begin(), a.end());
+    release(a);
+  }
+  std::vector<int> rq;
+  const std::vector<Id> questions = exchange_packed(comm, std::move(qbuf), qcount, &rq);
+  // The answers: a whole block where it is wanted, else each asked id's slot.
+  const std::int64_t nb = blocks_.first[rank_ + 1] - blocks_.first[rank_];
+  std::vector<std::int64_t> astart(static_cast<std::size_t>(size) + 1, 0);
+  for (int r = 0; r < size; ++r) astart[r + 1] = wanted[2 * r] ? nb : rq[r];
+  std::vector<int> acount;
+  pack_offsets(astart, acount, 2, "neighbour slots");
+  std::vector<OwnerDirectory::Slot> abuf(static_cast<std::size_t>(astart[size]));
+  for (std::size_t r = 0, q = 0, p = 0; r < static_cast<std::size_t>(size); q += static_cast<std::size_t>(rq[r++])) {
+    if (wanted[2 * r])
+      for (std::int64_t t = 0; t < nb; ++t) abuf[p++] = dir_.local(blocks_.first[rank_] + t);
+    else
+      for (int t = 0; t < rq[r]; ++t) abuf[p++] = dir_.local(static_cast<GlobalId>(questions[q + t]));
+  }
+  std::vector<int> rcount;
+  got_ = exchange_packed(comm, std::move(abuf), acount, &rcount);
+  from_.assign(static_cast<std::size_t>(size), 0);
+  next_.assign(static_cast<std::size_t>(size), 0);
+  for (int r = 1; r < size; ++r) from_[r] = from_[r - 1] + rcount[r - 1];
 }
 
-// Step 2: the owned nodes in owner-side index order, then per-node neighbour lists
-// sorted by global id (the fixed summation order) from the received edges,
-// which it consumes. A two-level bucket sort by owner-side index: one
-// streaming pass scatters the half-edges into at most kBuckets buckets of
-// consecutive owned indices (few write streams), the edge records are freed,
-// then each bucket is copied out (it fits in cache) and counting-sorted back
-// in place. Every later pass reads the lists in order, with each neighbour's
-// directory slot and values at hand: none goes back to the edge records at
-// random (at 10M on 2 ranks that indirection made the build latency-bound).
+// A row's header on its way to its owner: the node, its degree and, in a
+// second order, an owner-side index (see plan_rows).
+struct RowHeader {
+  GlobalId g;
+  std::int32_t degree, by_gid;
+};
+
+// Where a block holder's rows go. The directory numbers an owner's nodes
+// block by block (OwnerDirectory), so this rank's rows for owner o take
+// consecutive indices there: in the owner's index order ("pack order"),
+// owner by owner, they are rows first[o] .. first[o + 1] of `hdr`.
+struct RowPlan {
+  std::vector<std::int64_t> rows_to, ents_to, first;  // per owner: rows, entries; first place in pack order
+  std::vector<RowHeader> hdr;  // in pack order: node and degree; by_gid: the owner's k-th node of this block by id
+  std::vector<std::int64_t> place;  // row t's first entry within its owner's part, in pack order
+};
+
+RowPlan plan_rows(const OwnerDirectory& dir, const BlockRows& R, int size) {
+  const std::int64_t nb = R.num_rows();
+  RowPlan P;
+  P.rows_to.assign(static_cast<std::size_t>(size), 0);
+  P.ents_to = P.rows_to;
+  std::vector<std::int64_t> base(static_cast<std::size_t>(size), std::numeric_limits<std::int64_t>::max());
+  for (std::int64_t t = 0; t < nb; ++t) {
+    const auto& s = dir.local(R.begin + t);
+    ++P.rows_to[s.owner];
+    P.ents_to[s.owner] += R.offsets[t + 1] - R.offsets[t];
+    base[s.owner] = std::min<std::int64_t>(base[s.owner], s.index);
+  }
+  P.first.assign(static_cast<std::size_t>(size) + 1, 0);
+  for (int o = 0; o < size; ++o) P.first[o + 1] = P.first[o] + P.rows_to[o];
+  std::vector<std::int64_t> at(static_cast<std::size_t>(nb)), seen(P.first.begin(), P.first.end() - 1);
+  P.hdr.resize(static_cast<std::size_t>(nb));
+  for (std::int64_t t = 0; t < nb; ++t) {
+    const auto& s = dir.local(R.begin + t);
+    const std::int64_t p = P.first[s.owner] + (s.index - base[s.owner]);
+    if (s.index < base[s.owner] || p >= P.first[s.owner + 1])
+      throw std::logic_error("graph build: an owner's indices of one block are not consecutive");
+    at[static_cast<std::size_t>(t)] = p;
+    P.hdr[static_cast<std::size_t>(p)].g = R.begin + t;
+    P.hdr[static_cast<std::size_t>(p)].degree = static_cast<std::int32_t>(R.offsets[t + 1] - R.offsets[t]);
+    P.hdr[static_cast<std::size_t>(seen[s.owner]++)].by_gid = s.index;  // the k-th in global id order
+  }
+  std::vector<std::int64_t> within(static_cast<std::size_t>(nb));  // first entry of each place within its owner's part
+  for (int o = 0; o < size; ++o)
+    for (std::int64_t p = P.first[o], a = 0; p < P.first[o + 1]; ++p) {
+      within[static_cast<std::size_t>(p)] = a;
+      a += P.hdr[static_cast<std::size_t>(p)].degree;
+    }
+  P.place.resize(static_cast<std::size_t>(nb));
+  for (std::int64_t t = 0; t < nb; ++t) P.place[static_cast<std::size_t>(t)] = within[static_cast<std::size_t>(at[t])];
+  return P;
+}
+
+// The headers to the owners: each owner's nodes in index order, their
+// degrees (the lists' offsets) and their indices by global id. Sets L.owned,
+// L.by_gid, L.cnt; `seg[r]`: the first owned index of the rows block r sends.
 template <class Id>
-OwnedLists<Id> neighbour_lists(const OwnerDirectory& dir, int rank, std::vector<EdgeRec<Id>>&& mine,
-                           std::vector<double>&& mine_vals, int width) {
-  constexpr std::int64_t kBuckets = 4096;
+void receive_headers(MPI_Comm comm, RowPlan& P, OwnedLists<Id>& L, std::vector<std::int64_t>& seg) {
+  const int size = comm_size(comm);
+  std::vector<int> hcount(size), rrows;
+  for (int o = 0; o < size; ++o) hcount[o] = static_cast<int>(P.rows_to[o]);
+  const std::vector<RowHeader> got = exchange_packed(comm, std::move(P.hdr), hcount, &rrows);
+  if (got.size() > static_cast<std::size_t>(std::numeric_limits<LocalId>::max()))
+    throw Error("too many sensors on one rank for 32-bit local ids; use more ranks");
+  L.owned.resize(got.size());
+  L.by_gid.resize(got.size());
+  L.cnt.assign(got.size() + 1, 0);
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    L.owned[i] = got[i].g;
+    L.by_gid[i] = got[i].by_gid;
+    L.cnt[i + 1] = L.cnt[i] + got[i].degree;
+  }
+  seg.assign(static_cast<std::size_t>(size) + 1, 0);
+  for (int r = 0; r < size; ++r) seg[r + 1] = seg[r] + rrows[r];
+}
+
+// The rows with their neighbours' slots: this rank's own straight into its
+// lists (at L.cnt[seg[rank]]), the others into the send buffer by owner (at
+// sstart[o]). By chunks of rows: the slots looked up in one stream (fetched
+// ahead), then the rows in their own order, each written to its place (one
+// pass doing both waited on the lookups: 2.0-3.6 s at 10M on 2 ranks against
+// 1.3-1.4). Returns the entries whose ends have different owners.
+template <class Id>
+std::int64_t pack_rows(const OwnerDirectory& dir, const BlockRows& R, const std::vector<Id>& nbr, const RowPlan& P,
+                       NeighbourSlots<Id>& slots, std::int64_t own_first, const std::vector<std::int64_t>& sstart,
+                       OwnedLists<Id>& L, Entry<Id>* sbuf, double* svals) {
+  constexpr std::int64_t kAhead = 32, kChunk = 1 << 15;  // lookups in flight; entries per chunk (in cache)
+  const int width = R.width, rank = L.rank;
+  const std::int64_t nb = R.num_rows(), ne = static_cast<std::int64_t>(nbr.size());
+  const Id* ids = nbr.data();
+  const double* rv = R.values.data();
+  std::vector<OwnerDirectory::Slot> sl;
+  std::int64_t cut = 0;
+  for (std::int64_t t0 = 0; t0 < nb;) {
+    const std::int64_t k0 = R.offsets[t0];
+    std::int64_t t1 = t0 + 1;  // at least one row, a hub's too
+    while (t1 < nb && R.offsets[t1 + 1] - k0 <= kChunk) ++t1;
+    const std::int64_t k1 = R.offsets[t1];
+    if (sl.size() < static_cast<std::size_t>(k1 - k0)) sl.resize(static_cast<std::size_t>(k1 - k0));
+    for (std::int64_t k = k0; k < k1; ++k) {
+      if (k + kAhead < ne) __builtin_prefetch(slots.address(static_cast<GlobalId>(ids[k + kAhead])));
+      sl[static_cast<std::size_t>(k - k0)] = slots.at(static_cast<GlobalId>(ids[k]));
+    }
+    for (std::int64_t t = t0, k = k0; t < t1; ++t) {
+      const int o = dir.local(R.begin + t).owner;
+      const std::int64_t q0 = P.place[static_cast<std::size_t>(t)] + (o == rank ? own_first : sstart[o]);
+      Entry<Id>* ent = (o == rank ? L.entries.data() : sbuf) + q0;
+      double* val = (o == rank ? L.vals.data() : svals) + q0 * width;
+      for (; k < R.offsets[t + 1]; ++k, ++ent, val += width) {
+        const auto& s = sl[static_cast<std::size_t>(k - k0)];
+        cut += s.owner != o;
+        *ent = {ids[k], s.owner, s.index};
+        copy_values(rv + k * width, val, width);
+      }
+    }
+    t0 = t1;
+  }
+  return cut;
+}
+
+// The other owners' rows, received in place: block r's at the entries of
+// its index range [seg[r], seg[r + 1]).
+template <class Id>
+void receive_rows(MPI_Comm comm, const std::vector<Entry<Id>>& sbuf, const std::vector<double>& svals,
+                  const std::vector<int>& scount, const std::vector<std::int64_t>& sstart,
+                  const std::vector<std::int64_t>& seg, OwnedLists<Id>& L) {
+  const int size = comm_size(comm), rank = L.rank, width = L.width;
+  std::vector<int> rcount(size), rdisp(size), sdisp(size), vcount(size);
+  for (int r = 0; r < size; ++r) {
+    const std::int64_t b = L.cnt[seg[r]], e = L.cnt[seg[r + 1]];
+    if (e > INT32_MAX / std::max(width, 1)) throw Error("graph build: more than 2^31 entries on one rank");
+    rcount[r] = r == rank ? 0 : static_cast<int>(e - b);
+    rdisp[r] = static_cast<int>(b);
+    sdisp[r] = static_cast<int>(sstart[r]);
+  }
+  MPI_Datatype rec;
+  MPI_Type_contiguous(static_cast<int>(sizeof(Entry<Id>)), MPI_BYTE, &rec);
+  MPI_Type_commit(&rec);
+  MPI_Alltoallv(sbuf.data(), scount.data(), sdisp.data(), rec, L.entries.data(), rcount.data(), rdisp.data(), rec,
+                comm);
+  MPI_Type_free(&rec);
+  if (width == 0) return;
+  for (int r = 0; r < size; ++r) {
+    vcount[r] = scount[r] * width;
+    rcount[r] *= width;
+    rdisp[r] *= width;
+    sdisp[r] *= width;
+  }
+  MPI_Alltoallv(svals.data(), vcount.data(), sdisp.data(), MPI_DOUBLE, L.vals.data(), rcount.data(), rdisp.data(),
+                MPI_DOUBLE, comm);
+}
+
+// Step 1: every block row to the owner of its node, with its neighbours'
+// directory slots and its values; the owner's lists are the rows as received
+// (plan_rows: each block's rows arrive in the owner's index order, so they
+// land where the block's index range begins; a rank's own rows are copied
+// there, not sent to itself). Neighbours stay in global-id order. Consumes
+// the rows. `cut`: this rank's entries whose ends have different owners
+// (each cut edge is counted by both of its rows).
+template <class Id>
+OwnedLists<Id> rows_to_owners(MPI_Comm comm, const OwnerDirectory& dir, BlockRows&& R, std::vector<Id>& nbr,
+                              GlobalId& cut, PhaseClock& clock) {
+  const int size = comm_size(comm), rank = comm_rank(comm), width = R.width;
   OwnedLists<Id> L;
   L.rank = rank;
   L.width = width;
-  const auto n_owned = static_cast<std::int64_t>(dir.counts()[static_cast<std::size_t>(rank)]);
-  if (n_owned > static_cast<std::int64_t>(std::numeric_limits<LocalId>::max()))
-    throw Error("too many sensors on one rank for 32-bit local ids; use more ranks");
-  int shift = 0;
-  while ((n_owned >> shift) >= kBuckets) ++shift;
-  const std::int64_t nb = (n_owned >> shift) + 1;
-  std::vector<std::int64_t> bstart(static_cast<std::size_t>(nb) + 1, 0);
-  for (const auto& r : mine) {
-    if (r.oa == rank) ++bstart[(r.ia >> shift) + 1];
-    if (r.ob == rank) ++bstart[(r.ib >> shift) + 1];
+  RowPlan P = plan_rows(dir, R, size);
+  std::vector<std::int64_t> seg;
+  receive_headers(comm, P, L, seg);
+  NeighbourSlots<Id> slots(comm, dir, nbr);
+  {  // the ids asked of sparse blocks, in the order pack_rows reads them
+    std::vector<std::vector<Id>> ask(static_cast<std::size_t>(size));
+    if (slots.asks())
+      for (const Id u : nbr)
+        if (int r = 0; slots.asked(static_cast<GlobalId>(u), r)) ask[r].push_back(u);
+    slots.exchange(comm, ask);
   }
-  for (std::int64_t b = 0; b < nb; ++b) bstart[b + 1] += bstart[b];
-  const std::int64_t total = bstart[nb];
-  L.entries.resize(static_cast<std::size_t>(total));
-  L.vals.resize(static_cast<std::size_t>(total * width));
-  std::vector<std::int32_t> key(static_cast<std::size_t>(total));  // the owned end of each half-edge
-  {
-    std::vector<std::int64_t> fill(bstart.begin(), bstart.end() - 1);
-    auto put = [&](std::int32_t v, const Entry<Id>& e, const double* src) {
-      const auto p = fill[v >> shift]++;
-      L.entries[p] = e;
-      key[p] = v;
-      copy_values(src, L.vals.data() + p * width, width);
-    };
-    for (std::size_t t = 0; t < mine.size(); ++t) {
-      const auto& r = mine[t];
-      const double* src = mine_vals.data() + t * width;
-      if (r.oa == rank) put(r.ia, {r.b, r.ob, r.ib}, src);
-      if (r.ob == rank) put(r.ib, {r.a, r.oa, r.ia}, src);
-    }
-  }
-  // (The records' size, not their capacity: the room reserved beyond them for
-  // the exchange is not touched unless filled.)
-  L.peak_bytes = static_cast<std::int64_t>(mine.size() * sizeof(EdgeRec<Id>) + mine_vals.size() * sizeof(double) +
-                                           L.entries.capacity() * sizeof(Entry<Id>) + key.capacity() * 4 +
-                                           L.vals.capacity() * sizeof(double) + bstart.capacity() * 16);
-  release(mine);
-  release(mine_vals);
-  // The owned nodes only now, in the records' freed memory, not on top of the peak.
-  L.owned = dir.owned_nodes(&L.by_gid);
-  L.cnt.assign(static_cast<std::size_t>(n_owned) + 1, 0);
-  L.boundary.assign(static_cast<std::size_t>(n_owned), 0);
-  std::vector<Entry<Id>> b_ent;
-  std::vector<std::int32_t> b_key;
-  std::vector<double> b_val, tmp(static_cast<std::size_t>(std::max(width, 1)));
-  std::vector<std::int64_t> perm, fill;
-  for (std::int64_t b = 0; b < nb; ++b) {
-    const std::int64_t v0 = b << shift, v1 = std::min(n_owned, (b + 1) << shift);
-    const std::int64_t s = bstart[b], e = bstart[b + 1];
-    if (v0 >= v1) continue;
-    for (auto p = s; p < e; ++p) ++L.cnt[key[p] + 1];
-    for (auto v = v0; v < v1; ++v) L.cnt[v + 1] += L.cnt[v];
-    b_ent.assign(L.entries.begin() + s, L.entries.begin() + e);
-    b_key.assign(key.begin() + s, key.begin() + e);
-    b_val.assign(L.vals.begin() + s * width, L.vals.begin() + e * width);
-    fill.assign(L.cnt.begin() + v0, L.cnt.begin() + v1);
-    for (std::int64_t p = 0; p < e - s; ++p) {
-      const auto q = fill[b_key[p] - v0]++;
-      L.entries[q] = b_ent[p];
-      copy_values(b_val.data() + p * width, L.vals.data() + q * width, width);
-    }
-    for (auto v = v0; v < v1; ++v) {
-      sort_by_neighbour(L, L.cnt[v], L.cnt[v + 1], tmp, perm);
-      for (auto k = L.cnt[v]; k < L.cnt[v + 1]; ++k)
-        if (L.entries[k].owner != rank) L.boundary[v] = 1;
-    }
-  }
+  clock.done("slots");
+  L.entries.resize(static_cast<std::size_t>(L.cnt.back()));
+  L.vals.resize(L.entries.size() * static_cast<std::size_t>(width));
+  std::vector<std::int64_t> sstart(static_cast<std::size_t>(size) + 1, 0);
+  for (int o = 0; o < size; ++o) sstart[o + 1] = o == rank ? 0 : P.ents_to[o];
+  std::vector<int> scount;
+  pack_offsets(sstart, scount, std::max(width, 1), "graph build");
+  std::vector<Entry<Id>> sbuf(static_cast<std::size_t>(sstart[size]));
+  std::vector<double> svals(sbuf.size() * static_cast<std::size_t>(width));
+  cut = pack_rows(dir, R, nbr, P, slots, L.cnt[seg[rank]], sstart, L, sbuf.data(), svals.data());
+  L.peak_bytes = R.memory_bytes() + slots.memory_bytes() +
+                 static_cast<std::int64_t>(sbuf.size() * sizeof(Entry<Id>) + svals.size() * 8 +
+                                           L.entries.size() * sizeof(Entry<Id>) + L.vals.size() * 8) +
+                 static_cast<std::int64_t>(P.place.size() * 8);
+  R = BlockRows();
+  release(nbr);
+  receive_rows(comm, sbuf, svals, scount, sstart, seg, L);
+  clock.done("exchange");
+  L.boundary.assign(L.owned.size(), 0);
+  for (std::size_t v = 0; v < L.owned.size(); ++v)
+    for (auto k = L.cnt[v]; k < L.cnt[v + 1]; ++k)
+      if (L.entries[k].owner != rank) {
+        L.boundary[v] = 1;
+        break;
+      }
   return L;
 }
 
@@ -763,44 +770,48 @@ DistGraph::DistGraph(MPI_Comm comm, GlobalId n, const std::vector<int>& owner, s
 
 DistGraph::DistGraph(MPI_Comm comm, const OwnerDirectory& owners, std::vector<GlobalId> edges,
                      std::vector<double> edge_values, int width, int halo_width, LocalOrdering ordering)
-    : comm_(comm), n_global_(owners.num_global()), width_(width) {
-  // Below 2^31 nodes the build's records and lists carry 32-bit ids: at 10M
-  // sensors on 2 ranks 8 bytes less per edge record and 4 per list entry
-  // (docs/performance.md).
-  if (setup_wide_ids(comm_.get(), n_global_))
-    build<GlobalId>(owners, std::move(edges), std::move(edge_values), halo_width, ordering);
-  else
-    build<std::int32_t>(owners, std::move(edges), std::move(edge_values), halo_width, ordering);
+    : DistGraph(comm, owners,
+                BlockRows::from_edges(comm, owners.num_global(), std::move(edges), std::move(edge_values), width),
+                halo_width, ordering) {}
+
+DistGraph::DistGraph(MPI_Comm comm, const OwnerDirectory& owners, BlockRows&& rows, int halo_width,
+                     LocalOrdering ordering)
+    : comm_(comm), n_global_(owners.num_global()), width_(rows.width) {
+  if (rows.n != owners.num_global() || rows.begin != owners.block_begin() ||
+      rows.num_rows() != static_cast<std::int64_t>(owners.block_end() - owners.block_begin()))
+    throw std::logic_error("DistGraph: the rows' blocks are not the directory's");
+  // Below 2^31 nodes the rows and lists carry 32-bit ids (BlockRows::wide).
+  if (rows.wide) build(owners, std::move(rows), rows.nbr64, halo_width, ordering);
+  else build(owners, std::move(rows), rows.nbr32, halo_width, ordering);
 }
 
 template <class Id>
-void DistGraph::build(const OwnerDirectory& owners, std::vector<GlobalId>&& edges, std::vector<double>&& edge_values,
-                      int halo_width, LocalOrdering ordering) {
+void DistGraph::build(const OwnerDirectory& owners, BlockRows&& rows, std::vector<Id>& nbr, int halo_width,
+                      LocalOrdering ordering) {
   const MPI_Comm gc = comm_.get();  // the graph's own duplicate (halo traffic apart from the caller's)
   const int rank = comm_rank(gc), width = width_;
   PhaseClock clock(build_phases_);
-  std::vector<EdgeRec<Id>> mine;
-  std::vector<double> mine_vals;
-  long long cut = route_edges(gc, owners, std::move(edges), std::move(edge_values), width, mine, mine_vals), gcut = 0;
-  MPI_Allreduce(&cut, &gcut, 1, MPI_LONG_LONG, MPI_SUM, gc);
-  edge_cut_ = gcut;
-  clock.done("exchange");
-  const OwnedLists<Id> lists = neighbour_lists(owners, rank, std::move(mine), std::move(mine_vals), width);
+  GlobalId cut = 0;
+  std::vector<Id> ids = std::move(nbr);  // (rows is reset by rows_to_owners)
+  const OwnedLists<Id> lists = rows_to_owners(gc, owners, std::move(rows), ids, cut, clock);
+  long long c = static_cast<long long>(cut), gcut = 0;
+  MPI_Allreduce(&c, &gcut, 1, MPI_LONG_LONG, MPI_SUM, gc);
+  edge_cut_ = gcut / 2;  // each cut edge is in the rows of both its ends
   clock.done("lists");
   const std::vector<std::int64_t> order = local_order(lists, ordering, n_interior_);
   clock.done("order");
   n_owned_ = static_cast<LocalId>(lists.owned.size());
   const std::vector<Ghost> ghosts = ghost_nodes(lists, rank);
-  const LocalIds ids = number_nodes(lists, order, ghosts, local_to_global_, owned_sorted_);
-  fill_csr(lists, order, ids, rank, width, offsets_, adjacency_, edge_values_);
+  const LocalIds lids = number_nodes(lists, order, ghosts, local_to_global_, owned_sorted_);
+  fill_csr(lists, order, lids, rank, width, offsets_, adjacency_, edge_values_);
   clock.done("csr");
-  // The build's temporaries at their largest (edge records, lists, ghosts).
+  // The build's temporaries at their largest (rows, lists, ghosts).
   build_peak_bytes_ = std::max<std::int64_t>(lists.peak_bytes, static_cast<std::int64_t>(
       lists.entries.capacity() * sizeof(Entry<Id>) + lists.vals.capacity() * sizeof(double) +
       (lists.cnt.capacity() + lists.owned.capacity()) * 8 + lists.by_gid.capacity() * 4 +
-      ghosts.capacity() * sizeof(Ghost) + ids.ghost_sorted.capacity() * sizeof(ids.ghost_sorted[0]) +
-      ids.owned_to_local.capacity() * sizeof(LocalId) + order.capacity() * 8));
-  halo_ = make_halo(gc, ghosts, lists, ids, halo_width);
+      ghosts.capacity() * sizeof(Ghost) + lids.ghost_sorted.capacity() * sizeof(lids.ghost_sorted[0]) +
+      lids.owned_to_local.capacity() * sizeof(LocalId) + order.capacity() * 8));
+  halo_ = make_halo(gc, ghosts, lists, lids, halo_width);
   clock.done("halo");
 }
 

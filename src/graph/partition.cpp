@@ -163,35 +163,36 @@ OwnerDirectory::OwnerDirectory(MPI_Comm comm, GlobalId n, const std::vector<int>
   block_range(n, size, comm_rank(c), begin_, e);
   if (static_cast<GlobalId>(owners.size()) != e - begin_ || (!keys.empty() && keys.size() != owners.size()))
     throw Error("internal error: owner block of wrong size");
-  // Bins (owner, key) laid out owner by owner, keys 0..max of that owner;
-  // without keys one bin per owner.
-  std::vector<int> kmax(size, 0), kmax_all(size, 0);
-  for (std::size_t t = 0; t < keys.size(); ++t) kmax[owners[t]] = std::max(kmax[owners[t]], keys[t]);
-  MPI_Allreduce(kmax.data(), kmax_all.data(), size, MPI_INT, MPI_MAX, c);
+  // A node's index on its owner: the owner's nodes in lower blocks (an
+  // exclusive scan), then its place among the owner's nodes of this block in
+  // (key, global id) order: block by block, so that a block holder sends an
+  // owner's rows in the owner's index order and the owner receives them in
+  // place (DistGraph). Bins (owner, key) laid out owner by owner, keys 0..max
+  // of that owner in this block; without keys, or with more bins than
+  // kMaxKeyBins, one bin per owner.
+  std::vector<long long> per_owner(size, 0), base(size, 0);
+  for (const int o : owners) ++per_owner[o];
+  MPI_Exscan(per_owner.data(), base.data(), size, MPI_LONG_LONG, MPI_SUM, c);
+  if (comm_rank(c) == 0) std::fill(base.begin(), base.end(), 0);  // Exscan leaves rank 0's undefined
+  std::vector<long long> kmax(size, 0);
+  for (std::size_t t = 0; t < keys.size(); ++t) kmax[owners[t]] = std::max<long long>(kmax[owners[t]], keys[t]);
   std::vector<long long> first(static_cast<std::size_t>(size) + 1, 0);
-  for (int o = 0; o < size; ++o) first[o + 1] = first[o] + kmax_all[o] + 1;
-  const bool keyed = !keys.empty() && first[size] <= kMaxKeyBins;  // the same on every rank
+  for (int o = 0; o < size; ++o) first[o + 1] = first[o] + kmax[o] + 1;
+  const bool keyed = !keys.empty() && first[size] <= kMaxKeyBins;
   if (!keyed)
     for (int o = 0; o < size; ++o) first[o + 1] = o + 1;
   auto bin = [&](std::size_t t) { return first[owners[t]] + (keyed ? keys[t] : 0); };
-  // A node's index on its owner: the owner's nodes of smaller keys (all
-  // blocks), of its key in lower blocks (an exclusive scan of the bins), and
-  // of its key before it in this block.
-  std::vector<long long> cnt(static_cast<std::size_t>(first[size]), 0), base(cnt.size(), 0), tot(cnt.size(), 0);
-  for (std::size_t t = 0; t < owners.size(); ++t) ++cnt[bin(t)];
-  MPI_Exscan(cnt.data(), base.data(), static_cast<int>(cnt.size()), MPI_LONG_LONG, MPI_SUM, c);
-  if (comm_rank(c) == 0) std::fill(base.begin(), base.end(), 0);  // Exscan leaves rank 0's undefined
-  if (keyed) {
-    MPI_Allreduce(cnt.data(), tot.data(), static_cast<int>(cnt.size()), MPI_LONG_LONG, MPI_SUM, c);
-    for (int o = 0; o < size; ++o)
-      for (long long b = first[o], below = 0; b < first[o + 1]; ++b) {
-        base[b] += below;
-        below += tot[b];
-      }
-  }
+  std::vector<long long> next(static_cast<std::size_t>(first[size]), 0);
+  for (std::size_t t = 0; t < owners.size(); ++t) ++next[bin(t)];
+  for (int o = 0; o < size; ++o)
+    for (long long b = first[o], below = base[o]; b < first[o + 1]; ++b) {
+      const long long k = next[b];
+      next[b] = below;
+      below += k;
+    }
   slots_.resize(owners.size());
   for (std::size_t t = 0; t < owners.size(); ++t) {
-    const long long i = base[bin(t)]++;
+    const long long i = next[bin(t)]++;
     if (i > std::numeric_limits<LocalId>::max())
       throw Error("too many sensors on one rank for 32-bit local ids; use more ranks");
     slots_[t] = {owners[t], static_cast<std::int32_t>(i)};
@@ -625,6 +626,18 @@ std::string parmetis_partition(MPI_Comm comm, GlobalId n, const std::vector<Glob
 }
 #endif
 
+// The bfs partition over this rank's block rows (lx, ladj of neighbour ids
+// of type Index). Collective; "", kPastMaxLevels or why not.
+template <class Index>
+std::string bfs_on_rows(MPI_Comm comm, const Blocks& blocks, const std::vector<std::int64_t>& lx,
+                        const std::vector<Index>& ladj, int nparts, std::int64_t max_levels, std::vector<int>& block,
+                        std::int64_t& peak, std::vector<std::int32_t>* keys) {
+  std::int64_t bytes = 0;
+  const bool ok = detail::level_bisection(comm, blocks, lx, ladj, nparts, max_levels, block, bytes, keys);
+  peak = std::max(peak, bytes + static_cast<std::int64_t>(lx.capacity() * 8 + ladj.capacity() * sizeof(Index)));
+  return ok ? "" : detail::kPastMaxLevels;
+}
+
 // detail::bfs_blocks with neighbour ids of type Index.
 template <class Index>
 std::string bfs_blocks_impl(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, int nparts,
@@ -636,7 +649,7 @@ std::string bfs_blocks_impl(MPI_Comm comm, GlobalId n, const std::vector<GlobalI
   if (!all_ranks(comm, nb < std::numeric_limits<std::int32_t>::max()))
     return "graph too large for the bfs partition on this many ranks (2^31 nodes per rank)";
   std::vector<HalfRow<Index>> keep, got;
-  std::int64_t routed = 0, rows = 0, bytes = 0;
+  std::int64_t routed = 0, rows = 0;
   std::string why = route_halves(comm, blocks, edges, keep, got, routed);
   if (!why.empty()) return why;
   std::vector<std::int64_t> lx;
@@ -644,24 +657,33 @@ std::string bfs_blocks_impl(MPI_Comm comm, GlobalId n, const std::vector<GlobalI
   if (!all_ranks(comm, block_rows(nb, std::move(keep), std::move(got), lx, ladj, rows, false)))
     return "out of memory building the partition's graph";
   if (mark) mark("bfs_graph");
-  const bool ok = detail::level_bisection(comm, blocks, lx, ladj, nparts, max_levels, block, bytes, keys);
-  peak = std::max({peak, routed, rows,
-                   bytes + static_cast<std::int64_t>(lx.capacity() * 8 + ladj.capacity() * sizeof(Index))});
-  if (!ok) return detail::kPastMaxLevels;
-  if (mark) mark("bfs");
-  return "";
+  peak = std::max({peak, routed, rows});
+  why = bfs_on_rows(comm, blocks, lx, ladj, nparts, max_levels, block, peak, keys);
+  if (why.empty() && mark) mark("bfs");
+  return why;
 }
 
-// The bfs partition by every rank; on a graph whose breadth-first passes run
+// The bfs partition by every rank, over the block rows where they are given
+// (else built from the edges); on a graph whose breadth-first passes run
 // past default_max_levels (long chains) the one on rank 0, which walks them
 // without a collective per level.
 std::string bfs_partition_blocks(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges,
-                                 std::vector<int>& block, std::vector<std::int32_t>& keys, PhaseMarks& phase,
-                                 std::int64_t& peak, std::string& note) {
+                                 const BlockRows* rows, std::vector<int>& block, std::vector<std::int32_t>& keys,
+                                 PhaseMarks& phase, std::int64_t& peak, std::string& note) {
   const std::int64_t max_levels = detail::default_max_levels(n);
   PhaseMarks attempt;
-  const std::string why = detail::bfs_blocks(comm, n, edges, comm_size(comm), max_levels, block, peak,
-                                             [&](const char* s) { attempt(s); }, &keys);
+  std::string why;
+  if (rows) {
+    const Blocks blocks(n, comm_size(comm));
+    why = rows->wide ? bfs_on_rows(comm, blocks, rows->offsets, rows->nbr64, comm_size(comm), max_levels, block, peak,
+                                   &keys)
+                     : bfs_on_rows(comm, blocks, rows->offsets, rows->nbr32, comm_size(comm), max_levels, block, peak,
+                                   &keys);
+    if (why.empty()) attempt("bfs");
+  } else {
+    why = detail::bfs_blocks(comm, n, edges, comm_size(comm), max_levels, block, peak,
+                             [&](const char* s) { attempt(s); }, &keys);
+  }
   if (why != detail::kPastMaxLevels) {
     phase.phases.insert(phase.phases.end(), attempt.phases.begin(), attempt.phases.end());
     phase.mark = attempt.mark;
@@ -670,7 +692,7 @@ std::string bfs_partition_blocks(MPI_Comm comm, GlobalId n, const std::vector<Gl
   keys.clear();
   note = "the bfs partition ran on rank 0 (a breadth-first pass of over " + std::to_string(max_levels) + " levels)";
   phase("bfs_abandoned");  // the attempt, rows and passes, as one phase
-  return partition_on_root(comm, n, edges, PartitionMethod::kBfs, block, phase, peak);
+  return partition_on_root(comm, n, rows ? rows->edges() : edges, PartitionMethod::kBfs, block, phase, peak);
 }
 
 // Imbalance of the partition into stats (collective).
@@ -683,14 +705,14 @@ void partition_imbalance(const OwnerDirectory& dir, PartitionStats& stats) {
 // Owners of this rank's block by `method` (one rank or a fallback: block),
 // and with the distributed bfs partition the nodes' keys (level_bisection).
 // Sets `used` and `note`.
-std::vector<int> block_owners(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, PartitionMethod method,
-                              std::vector<std::int32_t>& keys, PhaseMarks& phase, std::int64_t& peak,
-                              std::string& used, std::string& note) {
+std::vector<int> block_owners(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, const BlockRows* rows,
+                              PartitionMethod method, std::vector<std::int32_t>& keys, PhaseMarks& phase,
+                              std::int64_t& peak, std::string& used, std::string& note) {
   const int size = comm_size(comm);
   std::vector<int> block;
   std::string why;
   if (method == PartitionMethod::kBfs && size > 1) {
-    why = bfs_partition_blocks(comm, n, edges, block, keys, phase, peak, note);
+    why = bfs_partition_blocks(comm, n, edges, rows, block, keys, phase, peak, note);
     if (why.empty()) used = "bfs";
   } else if (method == PartitionMethod::kMetis && size > 1) {
     why = partition_on_root(comm, n, edges, method, block, phase, peak);
@@ -733,15 +755,21 @@ std::string detail::root_csr(MPI_Comm comm, GlobalId n, const std::vector<Global
   return root_csr_impl(comm, n, edges, xadj, adjncy, peak);
 }
 
-OwnerDirectory partition_nodes(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges,
-                               PartitionMethod method, PartitionStats* stats) {
+// partition_nodes over the edges or, where given, over the block rows (the
+// methods that take edges get the rows' edges).
+static OwnerDirectory partition_impl(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges,
+                                     const BlockRows* rows, PartitionMethod method, PartitionStats* stats) {
   const double t0 = MPI_Wtime();
   PhaseMarks phase;
   method = resolve_partition_method(comm, n, method);
   std::string used = "block", note;
   std::int64_t peak = 0;
   std::vector<std::int32_t> keys;
-  const std::vector<int> block = block_owners(comm, n, edges, method, keys, phase, peak, used, note);
+  const bool rows_in_place = rows && method == PartitionMethod::kBfs;
+  const std::vector<int> block =
+      rows && !rows_in_place && comm_size(comm) > 1
+          ? block_owners(comm, n, rows->edges(), nullptr, method, keys, phase, peak, used, note)
+          : block_owners(comm, n, edges, rows_in_place ? rows : nullptr, method, keys, phase, peak, used, note);
   OwnerDirectory dir(comm, n, block, keys);
   if (stats) {
     stats->method = used;
@@ -753,6 +781,15 @@ OwnerDirectory partition_nodes(MPI_Comm comm, GlobalId n, const std::vector<Glob
     stats->seconds = MPI_Wtime() - t0;
   }
   return dir;
+}
+
+OwnerDirectory partition_nodes(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges,
+                               PartitionMethod method, PartitionStats* stats) {
+  return partition_impl(comm, n, edges, nullptr, method, stats);
+}
+
+OwnerDirectory partition_nodes(MPI_Comm comm, const BlockRows& rows, PartitionMethod method, PartitionStats* stats) {
+  return partition_impl(comm, rows.n, {}, &rows, method, stats);
 }
 
 std::vector<int> partition_graph(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges,

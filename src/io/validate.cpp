@@ -242,29 +242,26 @@ GlobalId merge_rows(std::vector<GlobalId>& edges, std::vector<double>& ranges, M
     }
   }
   std::size_t out = 0;
+  std::vector<double> rs, ss;  // one pair's readings
   for (std::size_t e = 0; e < E;) {
     std::size_t f = e;
     while (f < E && rows[f].a == rows[e].a && rows[f].b == rows[e].b) ++f;
-    const double cnt = static_cast<double>(f - e);
-    double sum = 0.0, wsum = 0.0;
     std::uint8_t flag = 0;
-    for (std::size_t t = e; t < f; ++t) {
-      const double w = sg ? 1.0 / (rows[t].sigma * rows[t].sigma) : 1.0;
-      sum += w * rows[t].r;
-      wsum += w;
-      flag |= rows[t].flag;
-    }
-    double avg = sum / wsum;
-    if (!std::isfinite(avg)) {  // the sum of huge ranges overflowed: average scaled terms
-      avg = 0.0;
-      for (std::size_t t = e; t < f; ++t)
-        avg += sg ? rows[t].r * (1.0 / (rows[t].sigma * rows[t].sigma) / wsum) : rows[t].r / cnt;
+    for (std::size_t t = e; t < f; ++t) flag |= rows[t].flag;
+    double sigma = rows[e].sigma, range = rows[e].r;
+    if (f - e > 1) {
+      rs.clear();
+      ss.clear();
+      for (std::size_t t = e; t < f; ++t) {
+        rs.push_back(rows[t].r);
+        ss.push_back(rows[t].sigma);
+      }
+      range = merge_readings(rs.data(), sg ? ss.data() : nullptr, f - e, 1, &sigma);
     }
     edges[2 * out] = rows[e].a;
     edges[2 * out + 1] = rows[e].b;
-    // Rounding must not take the mean outside [min, max] (rows are ascending).
-    ranges[out] = f - e == 1 ? rows[e].r : std::min(std::max(avg, rows[e].r), rows[f - 1].r);
-    if (sg) (*sg)[out] = f - e == 1 ? rows[e].sigma : 1.0 / std::sqrt(wsum);
+    ranges[out] = range;
+    if (sg) (*sg)[out] = sigma;
     if (fl) (*fl)[out] = flag;
     ++out;
     e = f;
@@ -277,6 +274,30 @@ GlobalId merge_rows(std::vector<GlobalId>& edges, std::vector<double>& ranges, M
 }
 
 }  // namespace
+
+double merge_readings(const double* ranges, const double* sigmas, std::size_t count, std::size_t stride,
+                      double* sigma) {
+  if (count == 1) {
+    if (sigmas) *sigma = sigmas[0];
+    return ranges[0];
+  }
+  double sum = 0.0, wsum = 0.0;
+  for (std::size_t t = 0; t < count; ++t) {
+    const double w = sigmas ? 1.0 / (sigmas[t * stride] * sigmas[t * stride]) : 1.0;
+    sum += w * ranges[t * stride];
+    wsum += w;
+  }
+  double avg = sum / wsum;
+  if (!std::isfinite(avg)) {  // the sum of huge ranges overflowed: average scaled terms
+    avg = 0.0;
+    for (std::size_t t = 0; t < count; ++t)
+      avg += sigmas ? ranges[t * stride] * (1.0 / (sigmas[t * stride] * sigmas[t * stride]) / wsum)
+                    : ranges[t * stride] / static_cast<double>(count);
+  }
+  if (sigmas) *sigma = 1.0 / std::sqrt(wsum);
+  // Rounding must not take the mean outside [min, max] (the readings are ascending).
+  return std::min(std::max(avg, ranges[0]), ranges[(count - 1) * stride]);
+}
 
 MergeStats merge_duplicates(std::vector<GlobalId>& sensor_edges, std::vector<double>& sensor_ranges,
                             std::vector<GlobalId>& anchor_edges, std::vector<double>& anchor_ranges) {

@@ -13,16 +13,6 @@ namespace snl {
 
 namespace {
 
-// A measurement on its way to the merge: ids of type IdT (32-bit below 2^31
-// sensors, setup_wide_ids), its range and, where the file has sigmas (NV =
-// 2), its sigma. At 10M sensors on 2 ranks 16 bytes instead of 32.
-template <class IdT, int NV>
-struct SensorEdgeRec {
-  using Id = IdT;
-  static constexpr int kValues = NV;
-  IdT i, j;
-  double v[NV];
-};
 struct AnchorEdgeRec {
   GlobalId i, k;
   double r, s;
@@ -74,109 +64,15 @@ struct Measurements {
   std::vector<double> ssigmas, asigmas;
 };
 
-// Writes the rows this rank kept and those it received (counts per sender)
-// into m in rank order, its own rows in its place: the order of the rows
-// sent to itself, so that a sorted network file (each rank's slab a range
-// of its rows) gives ascending rows, which merge_duplicates leaves as they are.
-template <class Rec>
-void unpack_rows(int rank, const std::vector<Rec>& kept, const std::vector<Rec>& got, const std::vector<int>& rcount,
-                 Measurements& m) {
-  const std::size_t total = kept.size() + got.size();
-  m.sedges.resize(2 * total);
-  m.sranges.reserve(edge_capacity(total));  // the graph build receives edges in place (DistGraph)
-  m.sranges.resize(total);
-  if (m.has_ssigmas) m.ssigmas.resize(total);
-  std::size_t out = 0;
-  auto emit = [&](const Rec* p, const Rec* e) {
-    for (; p < e; ++p, ++out) {
-      m.sedges[2 * out] = p->i;
-      m.sedges[2 * out + 1] = p->j;
-      m.sranges[out] = p->v[0];
-      if constexpr (Rec::kValues == 2) m.ssigmas[out] = p->v[1];
-    }
-  };
-  std::size_t off = 0;
-  for (int r = 0; r < static_cast<int>(rcount.size()); ++r) {
-    if (r == rank) emit(kept.data(), kept.data() + kept.size());
-    emit(got.data() + off, got.data() + off + rcount[r]);
-    off += static_cast<std::size_t>(rcount[r]);
-  }
-}
-
-// Step 1a: each sensor measurement to the rank where its copies meet (see
-// merge_measurements), as records of type Rec (SensorEdgeRec), unpacked into
-// m. Counted, then packed straight into one send buffer in rank order (at 10M
-// the per-rank vectors grew by reallocation and were copied once more to be
-// sent); the rows this rank keeps go to their own buffer, not through MPI's
-// copy to self. The records are freed on return, before the merge sorts.
-template <class Rec>
-void route_measurements(MPI_Comm comm, const Network& slab, Network* consumed, Measurements& m) {
-  const int size = comm_size(comm);
-  const GlobalId n = slab.num_sensors;
-  const int rank = comm_rank(comm);
-  const GlobalId ne = slab.local_sensor_edges();
-  auto dest = [&](GlobalId e) {
-    GlobalId a = slab.sensor_edges[2 * e], b = slab.sensor_edges[2 * e + 1];
-    if (a > b) std::swap(a, b);
-    const GlobalId key =
-        (mix64(static_cast<std::uint64_t>(a) * 0x9e3779b97f4a7c15ULL ^ static_cast<std::uint64_t>(b)) & 1) ? b : a;
-    return block_owner(n, size, key);
-  };
-  std::vector<std::int64_t> start(static_cast<std::size_t>(size) + 1, 0);
-  std::size_t n_kept = 0;
-  for (GlobalId e = 0; e < ne; ++e) {
-    const int r = dest(e);
-    if (r == rank) {
-      ++n_kept;
-    } else {
-      ++start[r + 1];
-    }
-  }
-  std::vector<int> scount;
-  pack_offsets(start, scount, 1, "merge");
-  std::vector<Rec> sbuf(static_cast<std::size_t>(start[size])), kept(n_kept);
-  n_kept = 0;
-  for (GlobalId e = 0; e < ne; ++e) {
-    GlobalId a = slab.sensor_edges[2 * e], b = slab.sensor_edges[2 * e + 1];
-    if (a > b) std::swap(a, b);
-    const int r = dest(e);
-    Rec& out = r == rank ? kept[n_kept++] : sbuf[static_cast<std::size_t>(start[r]++)];
-    out.i = static_cast<typename Rec::Id>(a);
-    out.j = static_cast<typename Rec::Id>(b);
-    out.v[0] = slab.sensor_ranges[e];
-    if constexpr (Rec::kValues == 2) out.v[1] = slab.sensor_sigmas.empty() ? 0.0 : slab.sensor_sigmas[e];
-  }
-  if (consumed) {  // at 10M on 2 ranks 0.96 GB per rank less at the exchange's peak
-    release(consumed->sensor_edges);
-    release(consumed->sensor_ranges);
-    release(consumed->sensor_sigmas);
-    release(consumed->sensor_nlos);
-  }
-  std::vector<int> rcount;
-  std::vector<Rec> got = exchange_packed(comm, std::move(sbuf), scount, &rcount);
-  test_fail_point("alloc");  // fault-injection tests: one rank runs out of memory between collectives
-  unpack_rows(rank, kept, got, rcount, m);
-}
-
-// Step 1: merge duplicates. Every measurement goes to the block owner of one
-// of its two sensors, chosen by a hash of the pair, where all copies of the
-// pair meet; rep gets the counts. (The smaller id would load rank r with
-// (2(P - r) - 1)/P^2 of the pairs: rank 0 with twice the mean.) With
-// `consumed` (the slab itself, when the caller gives it up), the slab's
-// sensor measurements are freed once packed, before the exchange.
-Measurements merge_measurements(MPI_Comm comm, const Network& slab, Network* consumed, ProblemReport& rep) {
+// Step 1: the anchor measurements to the block holders of their sensors,
+// duplicates merged (the sensor measurements merge in their rows,
+// sensor_rows); rep gets the counts.
+Measurements merge_measurements(MPI_Comm comm, const Network& slab, ProblemReport& rep) {
   const int size = comm_size(comm);
   const GlobalId n = slab.num_sensors;
   Measurements m;
   m.has_ssigmas = any_rank(comm, !slab.sensor_sigmas.empty());
   m.has_asigmas = any_rank(comm, !slab.anchor_sigmas.empty());
-  if (setup_wide_ids(comm, n)) {
-    if (m.has_ssigmas) route_measurements<SensorEdgeRec<GlobalId, 2>>(comm, slab, consumed, m);
-    else route_measurements<SensorEdgeRec<GlobalId, 1>>(comm, slab, consumed, m);
-  } else {
-    if (m.has_ssigmas) route_measurements<SensorEdgeRec<std::int32_t, 2>>(comm, slab, consumed, m);
-    else route_measurements<SensorEdgeRec<std::int32_t, 1>>(comm, slab, consumed, m);
-  }
   std::vector<std::vector<AnchorEdgeRec>> aout(size);
   for (GlobalId e = 0; e < slab.local_anchor_edges(); ++e) {
     const GlobalId i = slab.anchor_edges[2 * e];
@@ -193,18 +89,49 @@ Measurements merge_measurements(MPI_Comm comm, const Network& slab, Network* con
     if (m.has_asigmas) m.asigmas.push_back(r.s);
   }
   MeasurementExtras sx, ax;  // sigmas merge by inverse-variance weighting
-  if (m.has_ssigmas) sx.sigmas = &m.ssigmas;
   if (m.has_asigmas) ax.sigmas = &m.asigmas;
   MergeStats local = merge_duplicates(m.sedges, m.sranges, sx, m.aedges, m.aranges, ax);
-  long long in[4] = {local.merged_sensor_pairs, local.merged_anchor_pairs, static_cast<long long>(m.sranges.size()),
-                     static_cast<long long>(m.aranges.size())},
-            sum[4];
-  MPI_Allreduce(in, sum, 4, MPI_LONG_LONG, MPI_SUM, comm);
-  rep.merged.merged_sensor_pairs = sum[0];
-  rep.merged.merged_anchor_pairs = sum[1];
-  rep.num_sensor_edges = sum[2];
-  rep.num_anchor_edges = sum[3];
+  long long in[2] = {local.merged_anchor_pairs, static_cast<long long>(m.aranges.size())}, sum[2];
+  MPI_Allreduce(in, sum, 2, MPI_LONG_LONG, MPI_SUM, comm);
+  rep.merged.merged_anchor_pairs = sum[0];
+  rep.num_anchor_edges = sum[1];
   return m;
+}
+
+// Step 2a: the sensor measurements as block rows (BlockRows::from_pairs),
+// the range and, where the file has sigmas, the sigma as values, straight
+// from the slab: each pair's duplicates (either orientation, any rank) merge
+// in the rows of both its ends by merge_duplicates' rule (merge_readings).
+// With `consumed`, the slab's sensor measurements are freed once packed.
+// rep gets the counts.
+BlockRows sensor_rows(MPI_Comm comm, const Network& slab, Network* consumed, bool sigmas, ProblemReport& rep) {
+  const BlockRows::Merge merge = [](double* v, std::int64_t count, int width) {
+    double sigma = 0.0;
+    v[0] = merge_readings(v, width == 2 ? v + 1 : nullptr, static_cast<std::size_t>(count),
+                          static_cast<std::size_t>(width), &sigma);
+    if (width == 2) v[1] = sigma;
+  };
+  auto packed = [consumed] {
+    test_fail_point("alloc");  // fault-injection tests: one rank runs out of memory between collectives
+    if (!consumed) return;
+    release(consumed->sensor_edges);
+    release(consumed->sensor_ranges);
+    release(consumed->sensor_sigmas);
+    release(consumed->sensor_nlos);
+  };
+  BlockRows rows = BlockRows::from_pairs(comm, slab.num_sensors, slab.sensor_edges.data(),
+                                         static_cast<std::size_t>(slab.local_sensor_edges()), slab.sensor_ranges.data(),
+                                         slab.sensor_sigmas.empty() ? nullptr : slab.sensor_sigmas.data(),
+                                         sigmas ? 2 : 1, merge, packed);
+  long long in[2] = {rows.merged, 0}, sum[2];
+  const auto& nbr32 = rows.nbr32;
+  for (std::int64_t t = 0; t < rows.num_rows(); ++t)  // each pair once: in the row of its smaller end
+    for (auto k = rows.offsets[t]; k < rows.offsets[t + 1]; ++k)
+      in[1] += rows.begin + t < (rows.wide ? rows.nbr64[k] : static_cast<GlobalId>(nbr32[k]));
+  MPI_Allreduce(in, sum, 2, MPI_LONG_LONG, MPI_SUM, comm);
+  rep.merged.merged_sensor_pairs = sum[0];
+  rep.num_sensor_edges = sum[1];
+  return rows;
 }
 
 // Rank 0's part of unanchored_owned. Every rank's message is [number of
@@ -361,10 +288,9 @@ void LocalizationProblem::build(MPI_Comm comm, const Network& slab, Network* con
   // The setup's temporaries (GBs at 10M) reuse freed memory instead of faulting
   // fresh pages; returned to the system at the end (snl/core/memory.hpp).
   const ReuseFreedMemory reuse;
-  const GlobalId n = slab.num_sensors;
   ProblemReport rep;
   SetupClock clock(rep.setup_phases);
-  Measurements m = merge_measurements(comm, slab, consumed, rep);
+  Measurements m = merge_measurements(comm, slab, rep);
   if (consumed) {  // the merged lists hold them now; the truth and flags rows are still to come
     release(consumed->anchor_edges);
     release(consumed->anchor_ranges);
@@ -372,32 +298,24 @@ void LocalizationProblem::build(MPI_Comm comm, const Network& slab, Network* con
     release(consumed->anchor_nlos);
   }
   clock.done("merge");
+  // 2. The sensor graph by blocks of rows, ranges (and sigmas, as a second
+  // column) as values: the partition reads it and the graph build consumes
+  // it. The owners stay distributed (OwnerDirectory): nothing of size n.
+  BlockRows rows = sensor_rows(comm, slab, consumed, m.has_ssigmas, rep);
+  clock.done("rows");
   rep.setup_bytes.emplace_back(
-      "measurements", static_cast<std::int64_t>((m.sedges.capacity() + m.aedges.capacity()) * sizeof(GlobalId) +
-                                                (m.sranges.capacity() + m.aranges.capacity()) * sizeof(double)));
-  // 2. Partition and distribute the sensor graph; ranges ride along as edge
-  // data. The owners stay distributed (OwnerDirectory): nothing of size n.
-  const OwnerDirectory owners = partition_nodes(comm, n, m.sedges, method, &rep.partition);
+      "measurements", rows.memory_bytes() + static_cast<std::int64_t>(m.aedges.capacity() * sizeof(GlobalId) +
+                                                                      m.aranges.capacity() * sizeof(double)));
+  rep.setup_bytes.emplace_back("rows", rows.peak_bytes);
+  const OwnerDirectory owners = partition_nodes(comm, rows, method, &rep.partition);
   clock.done("partition");
   for (const auto& ph : rep.partition.phases) rep.setup_phases.emplace_back("partition." + ph.first, ph.second);
   rep.setup_bytes.emplace_back("partition", rep.partition.peak_bytes);
   rep.setup_bytes.emplace_back("directory", owners.memory_bytes());
-  // The merged lists move into the graph build, which frees them once it has its own records.
-  if (m.has_ssigmas) {  // sigmas ride along as a second column, then move to their own array
-    std::vector<double> vals;
-    vals.reserve(2 * edge_capacity(m.sranges.size()));
-    vals.resize(2 * m.sranges.size());
-    for (std::size_t e = 0; e < m.sranges.size(); ++e) {
-      vals[2 * e] = m.sranges[e];
-      vals[2 * e + 1] = m.ssigmas[e];
-    }
-    release(m.sranges);
-    release(m.ssigmas);
-    graph_ = DistGraph(comm, owners, std::move(m.sedges), std::move(vals), 2, std::max(dim_, 2));
+  graph_ = DistGraph(comm, owners, std::move(rows), std::max(dim_, 2));
+  if (m.has_ssigmas) {
     sensor_sigmas_ = graph_.take_last_edge_column();
     has_sensor_sigmas_ = true;
-  } else {
-    graph_ = DistGraph(comm, owners, std::move(m.sedges), std::move(m.sranges), 1, std::max(dim_, 2));
   }
   clock.done("graph");
   for (const auto& ph : graph_.build_phases()) rep.setup_phases.emplace_back("graph." + ph.first, ph.second);

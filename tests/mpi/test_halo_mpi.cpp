@@ -4,6 +4,10 @@
 #include <gtest/gtest.h>
 #include <mpi.h>
 
+#include <cstdlib>
+#include <map>
+#include <utility>
+
 #include "solve_helpers.hpp"
 
 using namespace snl;
@@ -136,4 +140,70 @@ TEST(DistGraph, ThirtyTwoAndSixtyFourBitIdsGiveTheSameGraph) {
   a.halo().exchange(fa.data(), 1);
   b.halo().exchange(fb.data(), 1);
   EXPECT_EQ(fa, fb);
+}
+
+// The rows' neighbours learn their directory slots either from whole blocks
+// of the directory or by asking for each id (NeighbourSlots, src/graph/
+// dist_graph.cpp); SNL_SETUP_SLOTS forces one way on the rank that sets it.
+// Every way, and ranks that mix them, give the same graph.
+TEST(DistGraph, NeighbourSlotsSentWholeOrAskedGiveTheSameGraph) {
+  const Network w = make_network({.n = 700, .dim = 2, .radius = 0.08});
+  auto build = [&](const char* how, bool only_rank0) {
+    if (how && (!only_rank0 || world_rank() == 0)) setenv("SNL_SETUP_SLOTS", how, 1);
+    LocalizationProblem p(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kBfs, nullptr);
+    unsetenv("SNL_SETUP_SLOTS");
+    return p;
+  };
+  const LocalizationProblem base = build(nullptr, false);
+  const DistGraph& a = base.graph();
+  if (world_size() > 1) EXPECT_GT(a.num_ghosts(), 0) << "no ghosts: the slots of other blocks are not used";
+  for (const auto& [how, only0] : {std::pair{"ask", false}, {"block", false}, {"ask", true}, {"block", true}}) {
+    const LocalizationProblem other = build(how, only0);
+    const DistGraph& b = other.graph();
+    EXPECT_EQ(a.local_to_global(), b.local_to_global()) << how << " rank " << world_rank();
+    EXPECT_EQ(a.offsets(), b.offsets()) << how;
+    EXPECT_EQ(a.adjacency(), b.adjacency()) << how;
+    EXPECT_EQ(a.edge_values(), b.edge_values()) << how;
+    EXPECT_EQ(a.num_interior(), b.num_interior()) << how;
+    EXPECT_EQ(a.edge_cut(), b.edge_cut()) << how;
+  }
+}
+
+// Duplicate measurements (either orientation, on any rank) merge in the
+// rows of both ends (BlockRows::from_pairs) into exactly the serial merge's
+// range and sigma (merge_duplicates): each owned node's edge to a neighbour
+// carries the merged pair's values, bit for bit.
+TEST(DistGraph, DuplicatesMergeInTheRowsAsTheSerialMerge) {
+  Network w = make_network({.n = 500, .dim = 2, .radius = 0.1});
+  const std::size_t ne = w.sensor_ranges.size();
+  for (std::size_t e = 0; e < ne; ++e) w.sensor_sigmas.push_back(0.01 + 0.001 * double(e % 5));
+  for (std::size_t e = 0; e < ne; e += 3) {  // every 3rd pair again (reversed on odd e), twice for some
+    for (int copy = 0; copy < (e % 9 == 0 ? 2 : 1); ++copy) {
+      const bool rev = (e + copy) % 2 == 1;
+      w.sensor_edges.insert(w.sensor_edges.end(), {w.sensor_edges[2 * e + (rev ? 1 : 0)],
+                                                   w.sensor_edges[2 * e + (rev ? 0 : 1)]});
+      w.sensor_ranges.push_back(w.sensor_ranges[e] * (1.0 + 0.013 * (copy + 1)));
+      w.sensor_sigmas.push_back(0.02 + 0.005 * copy);
+    }
+  }
+  w.total_sensor_edges = w.local_sensor_edges();
+  std::vector<GlobalId> se = w.sensor_edges, ae;
+  std::vector<double> sr = w.sensor_ranges, ss = w.sensor_sigmas, ar;
+  const MergeStats ms = merge_duplicates(se, sr, MeasurementExtras{&ss, nullptr}, ae, ar, MeasurementExtras{});
+  std::map<std::pair<GlobalId, GlobalId>, std::pair<double, double>> pair_values;
+  for (std::size_t e = 0; e < sr.size(); ++e) pair_values[{se[2 * e], se[2 * e + 1]}] = {sr[e], ss[e]};
+  ProblemReport rep;
+  const LocalizationProblem prob(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kBfs, &rep);
+  EXPECT_GT(ms.merged_sensor_pairs, 0);
+  EXPECT_EQ(rep.merged.merged_sensor_pairs, ms.merged_sensor_pairs);
+  EXPECT_EQ(rep.num_sensor_edges, static_cast<GlobalId>(sr.size()));
+  const DistGraph& g = prob.graph();
+  for (LocalId v = 0; v < g.num_owned(); ++v)
+    for (auto k = g.offsets()[v]; k < g.offsets()[v + 1]; ++k) {
+      const GlobalId a = g.global_id(v), b = g.global_id(g.adjacency()[k]);
+      const auto it = pair_values.find({std::min(a, b), std::max(a, b)});
+      ASSERT_NE(it, pair_values.end()) << a << "-" << b;
+      EXPECT_EQ(g.edge_value(k), it->second.first) << a << "-" << b << " rank " << world_rank();
+      EXPECT_EQ(prob.sensor_sigmas()[k], it->second.second) << a << "-" << b << " rank " << world_rank();
+    }
 }

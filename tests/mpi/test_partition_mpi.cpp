@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <map>
 #include <numeric>
 #include <random>
@@ -239,11 +240,12 @@ TEST(DistributedBfs, PastTheLevelLimitOnEveryRank) {
   EXPECT_EQ(owner, twin(g, 2));
 }
 
-// The directory's index: each owner's nodes in (key, global id) order, the
-// same however the nodes are split into blocks; owned_nodes lists them in
-// index order and, by_gid, the indices in global id order. Keys too many
-// for the bins fall back to global id order.
-void check_directory(int n, const std::vector<int>& owner, const std::vector<std::int32_t>& key, bool keyed) {
+// The directory's index: each owner's nodes block by block (the blocks of
+// block_range, in rank order), within a block in (key, global id) order;
+// owned_nodes lists them in index order and, by_gid, the indices in global
+// id order. Keys too many for a block's bins fall back to global id order.
+void check_directory(int n, const std::vector<int>& owner, const std::vector<std::int32_t>& key,
+                     const std::function<bool(int)>& keyed) {
   const int size = world_size(), rank = world_rank();
   GlobalId b, e;
   block_range(n, size, rank, b, e);
@@ -251,11 +253,15 @@ void check_directory(int n, const std::vector<int>& owner, const std::vector<std
   const std::vector<std::int32_t> mine_key =
       key.empty() ? std::vector<std::int32_t>{} : std::vector<std::int32_t>(key.begin() + b, key.begin() + e);
   const OwnerDirectory dir(MPI_COMM_WORLD, n, mine_owner, mine_key);
-  // The plain order: per owner, nodes sorted by (key, id) (or id).
+  // The plain order: per owner, nodes sorted by (block, key, id) (or id).
   std::vector<std::vector<GlobalId>> expect(size);
   std::vector<int> ids(n);
   std::iota(ids.begin(), ids.end(), 0);
-  std::stable_sort(ids.begin(), ids.end(), [&](int x, int y) { return keyed && key[x] < key[y]; });
+  auto block_of = [&](int v) { return block_owner(n, size, v); };
+  std::stable_sort(ids.begin(), ids.end(), [&](int x, int y) {
+    if (block_of(x) != block_of(y)) return block_of(x) < block_of(y);
+    return keyed(block_of(x)) && key[x] < key[y];
+  });
   for (int v : ids) expect[owner[v]].push_back(v);
   for (GlobalId g = b; g < e; ++g) {
     const auto& s = dir.local(g);
@@ -280,10 +286,13 @@ TEST(OwnerDirectory, IndexInKeyThenIdOrder) {
     key[v] = static_cast<std::int32_t>(rng() % 40);
     big[v] = v == 500 ? (1 << 23) : key[v];  // more bins than the directory keeps
   }
-  check_directory(n, owner, key, true);
-  check_directory(n, owner, {}, false);
-  check_directory(n, owner, std::vector<std::int32_t>(n, 0), false);
-  check_directory(n, owner, big, false);
+  auto all = [](int) { return true; };
+  auto none = [](int) { return false; };
+  check_directory(n, owner, key, all);
+  check_directory(n, owner, {}, none);
+  check_directory(n, owner, std::vector<std::int32_t>(n, 0), none);
+  // Only the block of node 500 has more bins than the directory keeps.
+  check_directory(n, owner, big, [&](int b) { return b != block_owner(n, size, 500); });
 }
 
 // The graph build indexes its lists by the directory's index; the local

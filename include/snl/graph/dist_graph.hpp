@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -182,6 +183,54 @@ LocalOrdering default_local_ordering();
 /// so that every rank takes the same width.
 bool setup_wide_ids(MPI_Comm comm, GlobalId n);
 
+/// The graph by blocks of rows: this rank holds the row of every node of its
+/// id block (block_range), neighbours ascending by global id (the fixed
+/// summation order), with `width` values per entry. Built once from the edge
+/// pairs: the partition reads it (partition_nodes) and the DistGraph consumes
+/// it, so the edges are routed and sorted once for both.
+struct BlockRows {
+  GlobalId n = 0, begin = 0;  ///< nodes in all; this rank's first row
+  int width = 0;
+  bool wide = false;                  ///< neighbour ids in nbr64 (setup_wide_ids), else in nbr32
+  std::vector<std::int64_t> offsets;  ///< row t: entries [offsets[t], offsets[t + 1])
+  std::vector<std::int32_t> nbr32;
+  std::vector<GlobalId> nbr64;
+  std::vector<double> values;  ///< `width` per entry
+  std::int64_t peak_bytes = 0;  ///< the build's temporaries at their largest on this rank
+  std::int64_t merged = 0;      ///< entries merged away (from_pairs) in this rank's rows of smaller ends
+  std::int64_t num_rows() const { return offsets.empty() ? 0 : static_cast<std::int64_t>(offsets.size()) - 1; }
+  std::int64_t memory_bytes() const {
+    return static_cast<std::int64_t>(offsets.capacity() * 8 + nbr32.capacity() * 4 + nbr64.capacity() * 8 +
+                                     values.capacity() * 8);
+  }
+  /// Collective. `edges`: this rank's share of the undirected edges (any rank
+  /// may hold any edge, each edge once overall), `values`: `width` per edge;
+  /// both consumed. Each edge's two half-edges go to the block holders of
+  /// their nodes, which bucket them into rows and sort each row.
+  static BlockRows from_edges(MPI_Comm comm, GlobalId n, std::vector<GlobalId>&& edges, std::vector<double>&& values,
+                              int width);
+  /// How entries of one pair met more than once are merged (duplicate
+  /// measurements): merge(values, count, width) gets `count` entries' values,
+  /// ascending (lexicographically), and leaves the merged ones in the first
+  /// `width`.
+  using Merge = std::function<void(double* values, std::int64_t count, int width)>;
+  /// Collective. From columns: pair e is (ends[2e], ends[2e + 1]), either
+  /// orientation, with the value col0[e] and, where width is 2, col1[e] (col1
+  /// null: 0). A pair met more than once (on any ranks) becomes one entry per
+  /// row, merged by `merge`. `packed` is called once the columns are read
+  /// (the caller may free them then).
+  static BlockRows from_pairs(MPI_Comm comm, GlobalId n, const GlobalId* ends, std::size_t count, const double* col0,
+                              const double* col1, int width, const Merge& merge,
+                              const std::function<void()>& packed = {});
+  /// This rank's edges with the smaller end in its block, as pairs (for the
+  /// partitioners that take edge lists).
+  std::vector<GlobalId> edges() const;
+};
+
+/// Collective. partition_nodes over block rows (BlockRows::from_edges): the
+/// bfs partition walks them in place; the other methods take their edges.
+OwnerDirectory partition_nodes(MPI_Comm comm, const BlockRows& rows, PartitionMethod method, PartitionStats* stats);
+
 class DistGraph {
  public:
   DistGraph() = default;
@@ -194,6 +243,10 @@ class DistGraph {
   /// is freed as soon as the build has its own copy of them.
   DistGraph(MPI_Comm comm, const OwnerDirectory& owners, std::vector<GlobalId> edges,
             std::vector<double> edge_values, int width, int halo_width,
+            LocalOrdering ordering = default_local_ordering());
+  /// Collective. From block rows (consumed), with the same result as from
+  /// their edges.
+  DistGraph(MPI_Comm comm, const OwnerDirectory& owners, BlockRows&& rows, int halo_width,
             LocalOrdering ordering = default_local_ordering());
   /// The same from every node's owner rank (identical on every rank).
   DistGraph(MPI_Comm comm, GlobalId n, const std::vector<int>& owner, std::vector<GlobalId> edges,
@@ -254,8 +307,8 @@ class DistGraph {
  private:
   // The constructor's steps with node ids of type Id in its temporaries.
   template <class Id>
-  void build(const OwnerDirectory& owners, std::vector<GlobalId>&& edges, std::vector<double>&& edge_values,
-             int halo_width, LocalOrdering ordering);
+  void build(const OwnerDirectory& owners, BlockRows&& rows, std::vector<Id>& nbr, int halo_width,
+             LocalOrdering ordering);
 
   // Declared first, so destroyed last: the halo's requests are freed before
   // the communicator they live on.

@@ -103,6 +103,13 @@ MergeStats merge_duplicates(std::vector<GlobalId>& sensor_edges, std::vector<dou
                             MeasurementExtras sensor_extras, std::vector<GlobalId>& anchor_edges,
                             std::vector<double>& anchor_ranges, MeasurementExtras anchor_extras);
 
+/// The merge of one pair's `count` readings, ascending in (range, sigma):
+/// range k at ranges[k * stride], its sigma at sigmas[k * stride] (sigmas
+/// null: none). Returns the merged range (merge_duplicates' rule, kept
+/// within [min, max]); with sigmas, *sigma gets the combined sigma.
+double merge_readings(const double* ranges, const double* sigmas, std::size_t count, std::size_t stride,
+                      double* sigma);
+
 /// Header of a network file: what is needed before reading the data.
 struct NetworkHeader {
   int dim = 0;
