@@ -23,8 +23,6 @@ void pack_offsets(std::vector<std::int64_t>& start, std::vector<int>& scount, in
   }
 }
 
-std::size_t edge_capacity(std::size_t n) { return n + n / 16 + 1024; }
-
 LocalOrdering default_local_ordering() {
   const char* e = std::getenv("SNL_LOCAL_ORDER");
   return (e && std::strcmp(e, "gid") == 0) ? LocalOrdering::kGlobalId : LocalOrdering::kRcm;
@@ -455,8 +453,8 @@ void receive_headers(MPI_Comm comm, RowPlan& P, OwnedLists<Id>& L, std::vector<s
 // lists (at L.cnt[seg[rank]]), the others into the send buffer by owner (at
 // sstart[o]). By chunks of rows: the slots looked up in one stream (fetched
 // ahead), then the rows in their own order, each written to its place (one
-// pass doing both waited on the lookups: 2.0-3.6 s at 10M on 2 ranks against
-// 1.3-1.4). Returns the entries whose ends have different owners.
+// pass doing both waited on the lookups). Returns the entries whose ends
+// have different owners.
 template <class Id>
 std::int64_t pack_rows(const OwnerDirectory& dir, const BlockRows& R, const std::vector<Id>& nbr, const RowPlan& P,
                        NeighbourSlots<Id>& slots, std::int64_t own_first, const std::vector<std::int64_t>& sstart,
@@ -586,7 +584,7 @@ template <class Id>
 void rcm_groups(const OwnedLists<Id>& L, std::vector<std::int64_t> (&group)[2]) {
   // Owned-index adjacency (-1 for ghosts) and group positions for the BFS.
   auto nbr = [&L](std::int64_t k) -> std::int64_t { return L.nbr_owner(k) == L.rank ? L.nbr_index(k) : -1; };
-  std::vector<std::int32_t> pos(L.owned.size(), -1);  // 32-bit: n_owned < 2^31 (neighbour_lists)
+  std::vector<std::int32_t> pos(L.owned.size(), -1);  // 32-bit: n_owned < 2^31 (receive_headers)
   std::vector<std::int64_t> seeds, ties;
   for (int gi : {1, 0}) {  // the boundary first: its order seeds the interior's
     auto& grp = group[gi];

@@ -48,9 +48,8 @@ TEST(Halo, GhostsReceiveOwnersValues) {
 }
 
 // Every edge held by rank 0 and every node owned away from its block: the
-// other ranks start with no edges and receive thousands in each hop, more
-// than the room reserved after the records they keep (edge_capacity), so the
-// graph build's exchanges take their copying route too. Each owned node's
+// other ranks start with no edges and receive thousands of half-edges, then
+// every row they own from other block holders. Each owned node's
 // neighbours and values, in global-id order, against the edge list; with the
 // build's 32-bit ids (the default below 2^31 nodes) and its 64-bit ones
 // (SNL_SETUP_IDS=64).

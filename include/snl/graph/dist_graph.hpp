@@ -142,29 +142,12 @@ template <class T>
 std::vector<T> exchange_packed(MPI_Comm comm, std::vector<T>&& sbuf, const std::vector<int>& scount,
                                std::vector<int>* recv_counts = nullptr);
 
-/// Collective: the same exchange, what this rank receives placed after the
-/// first `keep` items of `into` (the items a caller keeps instead of sending
-/// them to itself), which grows to hold them: in its own storage where its capacity allows,
-/// else in a larger vector (with edge_capacity's room where keep > 0) that
-/// takes only the kept items along. Every rank agrees on a refusal of more
-/// than 2^31 items received by one rank.
-template <class T>
-void exchange_packed_into(MPI_Comm comm, const std::vector<T>& sbuf, const std::vector<int>& scount,
-                          std::vector<T>& into, std::size_t keep, std::vector<int>* recv_counts = nullptr);
-
 /// Collective all-to-all of trivially copyable records: out[r] goes to rank r;
 /// returns what this rank received, concatenated in rank order.
 /// With `recv_counts`, how many came from each rank.
 template <class T>
 std::vector<T> exchange_records(MPI_Comm comm, const std::vector<std::vector<T>>& out,
                                 std::vector<int>* recv_counts = nullptr);
-
-/// A capacity for n edges with room beyond them (for their values, width
-/// times it; reserved, so not touched): the DistGraph constructor receives
-/// the edges other ranks send after those it keeps, in the storage of the
-/// vectors it was given where their capacity allows, and copies them into a
-/// larger one where it does not.
-std::size_t edge_capacity(std::size_t n);
 
 /// Order of the owned nodes inside the interior and boundary groups.
 /// kRcm: reverse Cuthill-McKee on the owned subgraph, so that neighbours are
@@ -329,10 +312,14 @@ class DistGraph {
 
 // ---- template implementation ----
 template <class T>
-void exchange_packed_into(MPI_Comm comm, const std::vector<T>& sbuf, const std::vector<int>& scount,
-                          std::vector<T>& into, std::size_t keep, std::vector<int>* recv_counts) {
+std::vector<T> exchange_packed(MPI_Comm comm, std::vector<T>&& sbuf, const std::vector<int>& scount,
+                               std::vector<int>* recv_counts) {
   int size = 1;
   MPI_Comm_size(comm, &size);
+  if (size == 1) {  // nothing to move between ranks
+    if (recv_counts) *recv_counts = scount;
+    return std::move(sbuf);
+  }
   std::vector<int> rcount(size), sdisp(size), rdisp(size);
   MPI_Alltoall(scount.data(), 1, MPI_INT, rcount.data(), 1, MPI_INT, comm);
   std::int64_t rtot = 0, stot = 0;
@@ -345,35 +332,14 @@ void exchange_packed_into(MPI_Comm comm, const std::vector<T>& sbuf, const std::
   int ok = rtot <= INT32_MAX && stot <= INT32_MAX, all_ok = 0;
   MPI_Allreduce(&ok, &all_ok, 1, MPI_INT, MPI_MIN, comm);
   if (!all_ok) throw Error("record exchange: more than 2^31 records sent or received by one rank; use more ranks");
-  const auto extra = static_cast<std::size_t>(rtot);
-  if (keep + extra > into.capacity()) {  // a larger vector, with only the kept items copied
-    std::vector<T> bigger;
-    bigger.reserve(keep > 0 ? edge_capacity(keep + extra) : extra);
-    bigger.assign(into.begin(), into.begin() + static_cast<std::ptrdiff_t>(keep));
-    into.swap(bigger);
-  }
-  into.resize(keep + extra);
+  std::vector<T> rbuf(static_cast<std::size_t>(rtot));
   MPI_Datatype rec;
   MPI_Type_contiguous(static_cast<int>(sizeof(T)), MPI_BYTE, &rec);
   MPI_Type_commit(&rec);
-  MPI_Alltoallv(sbuf.data(), scount.data(), sdisp.data(), rec, into.data() + keep, rcount.data(), rdisp.data(), rec,
-                comm);
+  MPI_Alltoallv(sbuf.data(), scount.data(), sdisp.data(), rec, rbuf.data(), rcount.data(), rdisp.data(), rec, comm);
   MPI_Type_free(&rec);
-  if (recv_counts) *recv_counts = std::move(rcount);
-}
-
-template <class T>
-std::vector<T> exchange_packed(MPI_Comm comm, std::vector<T>&& sbuf, const std::vector<int>& scount,
-                               std::vector<int>* recv_counts) {
-  int size = 1;
-  MPI_Comm_size(comm, &size);
-  if (size == 1) {  // nothing to move between ranks
-    if (recv_counts) *recv_counts = scount;
-    return std::move(sbuf);
-  }
-  std::vector<T> rbuf;
-  exchange_packed_into(comm, sbuf, scount, rbuf, 0, recv_counts);
   release(sbuf);
+  if (recv_counts) *recv_counts = std::move(rcount);
   return rbuf;
 }
 
