@@ -297,7 +297,8 @@ class NeighbourSlots {
       if (r != rank_ && !dense_[r] && refs_[r] > 0) return true;
     return false;
   }
-  // Whether u's slot must be asked for: what ask() records, in pack order.
+  // Whether u's slot must be asked for (of block r): the caller lists such
+  // ids in the order pack_rows reads them.
   bool asked(GlobalId u, int& r) const {
     r = blocks_.of(u);
     return r != rank_ && !dense_[r];
@@ -311,13 +312,13 @@ class NeighbourSlots {
     if (dense_[r]) return got_[static_cast<std::size_t>(from_[r] + (u - blocks_.first[r]))];
     return got_[static_cast<std::size_t>(from_[r] + next_[r]++)];
   }
-  // Where u's slot will be read (for a prefetch; asked slots are read in
-  // order, so any address does). The caller issues the prefetch: GCC found a
-  // member function around it pure and dropped the call.
+  // Where u's slot will be read, for a prefetch (asked slots are read in
+  // order: their block's first answer does). The caller issues the prefetch:
+  // GCC found a member function around it pure and dropped the call.
   const void* address(GlobalId u) const {
     const int r = blocks_.of(u);
     if (r == rank_) return &dir_.local(u);
-    return got_.data() + from_[r] + (dense_[r] ? (u - blocks_.first[r]) : next_[r]);
+    return got_.data() + from_[r] + (dense_[r] ? (u - blocks_.first[r]) : 0);
   }
   std::int64_t memory_bytes() const { return static_cast<std::int64_t>(got_.capacity() * sizeof(got_[0])); }
 
@@ -449,21 +450,20 @@ void receive_headers(MPI_Comm comm, RowPlan& P, OwnedLists<Id>& L, std::vector<s
   for (int r = 0; r < size; ++r) seg[r + 1] = seg[r] + rrows[r];
 }
 
-// The rows with their neighbours' slots: this rank's own straight into its
-// lists (at L.cnt[seg[rank]]), the others into the send buffer by owner (at
-// sstart[o]). By chunks of rows: the slots looked up in one stream (fetched
-// ahead), then the rows in their own order, each written to its place (one
-// pass doing both waited on the lookups). Returns the entries whose ends
-// have different owners.
+// The rows' entries with their neighbours' slots: this rank's own straight
+// into its lists (at L.cnt[seg[rank]]), the others into the send buffer by
+// owner (at sstart[o]). By chunks of rows: the slots looked up in one stream
+// (fetched ahead), then the rows in their own order, each written to its
+// place (one pass doing both waited on the lookups). Returns the entries
+// whose ends have different owners.
 template <class Id>
-std::int64_t pack_rows(const OwnerDirectory& dir, const BlockRows& R, const std::vector<Id>& nbr, const RowPlan& P,
-                       NeighbourSlots<Id>& slots, std::int64_t own_first, const std::vector<std::int64_t>& sstart,
-                       OwnedLists<Id>& L, Entry<Id>* sbuf, double* svals) {
+std::int64_t pack_entries(const OwnerDirectory& dir, const BlockRows& R, const std::vector<Id>& nbr,
+                          const RowPlan& P, NeighbourSlots<Id>& slots, std::int64_t own_first,
+                          const std::vector<std::int64_t>& sstart, OwnedLists<Id>& L, Entry<Id>* sbuf) {
   constexpr std::int64_t kAhead = 32, kChunk = 1 << 15;  // lookups in flight; entries per chunk (in cache)
-  const int width = R.width, rank = L.rank;
+  const int rank = L.rank;
   const std::int64_t nb = R.num_rows(), ne = static_cast<std::int64_t>(nbr.size());
   const Id* ids = nbr.data();
-  const double* rv = R.values.data();
   std::vector<OwnerDirectory::Slot> sl;
   std::int64_t cut = 0;
   for (std::int64_t t0 = 0; t0 < nb;) {
@@ -478,14 +478,11 @@ std::int64_t pack_rows(const OwnerDirectory& dir, const BlockRows& R, const std:
     }
     for (std::int64_t t = t0, k = k0; t < t1; ++t) {
       const int o = dir.local(R.begin + t).owner;
-      const std::int64_t q0 = P.place[static_cast<std::size_t>(t)] + (o == rank ? own_first : sstart[o]);
-      Entry<Id>* ent = (o == rank ? L.entries.data() : sbuf) + q0;
-      double* val = (o == rank ? L.vals.data() : svals) + q0 * width;
-      for (; k < R.offsets[t + 1]; ++k, ++ent, val += width) {
+      Entry<Id>* ent = (o == rank ? L.entries.data() + own_first : sbuf + sstart[o]) + P.place[t];
+      for (; k < R.offsets[t + 1]; ++k, ++ent) {
         const auto& s = sl[static_cast<std::size_t>(k - k0)];
         cut += s.owner != o;
         *ent = {ids[k], s.owner, s.index};
-        copy_values(rv + k * width, val, width);
       }
     }
     t0 = t1;
@@ -493,45 +490,53 @@ std::int64_t pack_rows(const OwnerDirectory& dir, const BlockRows& R, const std:
   return cut;
 }
 
-// The other owners' rows, received in place: block r's at the entries of
-// its index range [seg[r], seg[r + 1]).
+// The rows' values, as pack_entries places the entries (`width` per entry).
 template <class Id>
-void receive_rows(MPI_Comm comm, const std::vector<Entry<Id>>& sbuf, const std::vector<double>& svals,
-                  const std::vector<int>& scount, const std::vector<std::int64_t>& sstart,
-                  const std::vector<std::int64_t>& seg, OwnedLists<Id>& L) {
-  const int size = comm_size(comm), rank = L.rank, width = L.width;
-  std::vector<int> rcount(size), rdisp(size), sdisp(size), vcount(size);
+void pack_values(const OwnerDirectory& dir, const BlockRows& R, const RowPlan& P, std::int64_t own_first,
+                 const std::vector<std::int64_t>& sstart, OwnedLists<Id>& L, double* svals) {
+  const int width = R.width;
+  for (std::int64_t t = 0; t < R.num_rows(); ++t) {
+    const int o = dir.local(R.begin + t).owner;
+    double* val = (o == L.rank ? L.vals.data() + own_first * width : svals + sstart[o] * width) + P.place[t] * width;
+    std::copy(R.values.data() + R.offsets[t] * width, R.values.data() + R.offsets[t + 1] * width, val);
+  }
+}
+
+// The other owners' part of the lists (`width` items of T per entry),
+// received in place: block r's at the entries of its index range
+// [seg[r], seg[r + 1]). Consumes the send buffer.
+template <class T, class Id>
+void receive_in_place(MPI_Comm comm, std::vector<T>&& sbuf, int width, const std::vector<int>& scount,
+                      const std::vector<std::int64_t>& sstart, const std::vector<std::int64_t>& seg,
+                      const OwnedLists<Id>& L, T* lists) {
+  const int size = comm_size(comm);
+  std::vector<int> rcount(size), rdisp(size), sdisp(size), count(size);
   for (int r = 0; r < size; ++r) {
     const std::int64_t b = L.cnt[seg[r]], e = L.cnt[seg[r + 1]];
     if (e > INT32_MAX / std::max(width, 1)) throw Error("graph build: more than 2^31 entries on one rank");
-    rcount[r] = r == rank ? 0 : static_cast<int>(e - b);
-    rdisp[r] = static_cast<int>(b);
-    sdisp[r] = static_cast<int>(sstart[r]);
+    rcount[r] = r == L.rank ? 0 : static_cast<int>((e - b) * width);
+    rdisp[r] = static_cast<int>(b * width);
+    sdisp[r] = static_cast<int>(sstart[r] * width);
+    count[r] = scount[r] * width;
   }
   MPI_Datatype rec;
-  MPI_Type_contiguous(static_cast<int>(sizeof(Entry<Id>)), MPI_BYTE, &rec);
+  MPI_Type_contiguous(static_cast<int>(sizeof(T)), MPI_BYTE, &rec);
   MPI_Type_commit(&rec);
-  MPI_Alltoallv(sbuf.data(), scount.data(), sdisp.data(), rec, L.entries.data(), rcount.data(), rdisp.data(), rec,
-                comm);
+  MPI_Alltoallv(sbuf.data(), count.data(), sdisp.data(), rec, lists, rcount.data(), rdisp.data(), rec, comm);
   MPI_Type_free(&rec);
-  if (width == 0) return;
-  for (int r = 0; r < size; ++r) {
-    vcount[r] = scount[r] * width;
-    rcount[r] *= width;
-    rdisp[r] *= width;
-    sdisp[r] *= width;
-  }
-  MPI_Alltoallv(svals.data(), vcount.data(), sdisp.data(), MPI_DOUBLE, L.vals.data(), rcount.data(), rdisp.data(),
-                MPI_DOUBLE, comm);
+  release(sbuf);
 }
 
 // Step 1: every block row to the owner of its node, with its neighbours'
 // directory slots and its values; the owner's lists are the rows as received
 // (plan_rows: each block's rows arrive in the owner's index order, so they
 // land where the block's index range begins; a rank's own rows are copied
-// there, not sent to itself). Neighbours stay in global-id order. Consumes
-// the rows. `cut`: this rank's entries whose ends have different owners
-// (each cut edge is counted by both of its rows).
+// there, not sent to itself). Neighbours stay in global-id order. The
+// entries go first and the values after them, each round's send buffer and
+// inputs freed before the next (the build's high-water mark: 12 bytes per
+// entry less than with both at once, when half of them leave). Consumes the
+// rows. `cut`: this rank's entries whose ends have different owners (each cut
+// edge is counted by both of its rows).
 template <class Id>
 OwnedLists<Id> rows_to_owners(MPI_Comm comm, const OwnerDirectory& dir, BlockRows&& R, std::vector<Id>& nbr,
                               GlobalId& cut, PhaseClock& clock) {
@@ -543,7 +548,7 @@ OwnedLists<Id> rows_to_owners(MPI_Comm comm, const OwnerDirectory& dir, BlockRow
   std::vector<std::int64_t> seg;
   receive_headers(comm, P, L, seg);
   NeighbourSlots<Id> slots(comm, dir, nbr);
-  {  // the ids asked of sparse blocks, in the order pack_rows reads them
+  {  // the ids asked of sparse blocks, in the order pack_entries reads them
     std::vector<std::vector<Id>> ask(static_cast<std::size_t>(size));
     if (slots.asks())
       for (const Id u : nbr)
@@ -551,22 +556,28 @@ OwnedLists<Id> rows_to_owners(MPI_Comm comm, const OwnerDirectory& dir, BlockRow
     slots.exchange(comm, ask);
   }
   clock.done("slots");
-  L.entries.resize(static_cast<std::size_t>(L.cnt.back()));
-  L.vals.resize(L.entries.size() * static_cast<std::size_t>(width));
   std::vector<std::int64_t> sstart(static_cast<std::size_t>(size) + 1, 0);
   for (int o = 0; o < size; ++o) sstart[o + 1] = o == rank ? 0 : P.ents_to[o];
   std::vector<int> scount;
   pack_offsets(sstart, scount, std::max(width, 1), "graph build");
-  std::vector<Entry<Id>> sbuf(static_cast<std::size_t>(sstart[size]));
-  std::vector<double> svals(sbuf.size() * static_cast<std::size_t>(width));
-  cut = pack_rows(dir, R, nbr, P, slots, L.cnt[seg[rank]], sstart, L, sbuf.data(), svals.data());
-  L.peak_bytes = R.memory_bytes() + slots.memory_bytes() +
-                 static_cast<std::int64_t>(sbuf.size() * sizeof(Entry<Id>) + svals.size() * 8 +
-                                           L.entries.size() * sizeof(Entry<Id>) + L.vals.size() * 8) +
-                 static_cast<std::int64_t>(P.place.size() * 8);
-  R = BlockRows();
+  const std::int64_t own_first = L.cnt[seg[rank]], leaving = sstart[size];
+  L.entries.resize(static_cast<std::size_t>(L.cnt.back()));
+  std::vector<Entry<Id>> sbuf(static_cast<std::size_t>(leaving));
+  cut = pack_entries(dir, R, nbr, P, slots, own_first, sstart, L, sbuf.data());
+  const std::int64_t rows_bytes = R.memory_bytes() + static_cast<std::int64_t>(nbr.capacity() * sizeof(Id));
+  L.peak_bytes = rows_bytes + slots.memory_bytes() + static_cast<std::int64_t>(P.place.size() * 8) +
+                 static_cast<std::int64_t>((sbuf.size() + L.entries.size()) * sizeof(Entry<Id>));
   release(nbr);
-  receive_rows(comm, sbuf, svals, scount, sstart, seg, L);
+  receive_in_place(comm, std::move(sbuf), 1, scount, sstart, seg, L, L.entries.data());
+  L.vals.resize(L.entries.size() * static_cast<std::size_t>(width));
+  std::vector<double> svals(static_cast<std::size_t>(leaving) * static_cast<std::size_t>(width));
+  pack_values(dir, R, P, own_first, sstart, L, svals.data());
+  L.peak_bytes = std::max<std::int64_t>(
+      L.peak_bytes, R.memory_bytes() + static_cast<std::int64_t>(P.place.size() * 8 + svals.size() * 8 +
+                                                                 L.vals.size() * 8 +
+                                                                 L.entries.size() * sizeof(Entry<Id>)));
+  R = BlockRows();
+  if (width > 0) receive_in_place(comm, std::move(svals), width, scount, sstart, seg, L, L.vals.data());
   clock.done("exchange");
   L.boundary.assign(L.owned.size(), 0);
   for (std::size_t v = 0; v < L.owned.size(); ++v)

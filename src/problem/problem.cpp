@@ -123,14 +123,10 @@ BlockRows sensor_rows(MPI_Comm comm, const Network& slab, Network* consumed, boo
                                          static_cast<std::size_t>(slab.local_sensor_edges()), slab.sensor_ranges.data(),
                                          slab.sensor_sigmas.empty() ? nullptr : slab.sensor_sigmas.data(),
                                          sigmas ? 2 : 1, merge, packed);
-  long long in[2] = {rows.merged, 0}, sum[2];
-  const auto& nbr32 = rows.nbr32;
-  for (std::int64_t t = 0; t < rows.num_rows(); ++t)  // each pair once: in the row of its smaller end
-    for (auto k = rows.offsets[t]; k < rows.offsets[t + 1]; ++k)
-      in[1] += rows.begin + t < (rows.wide ? rows.nbr64[k] : static_cast<GlobalId>(nbr32[k]));
+  long long in[2] = {rows.merged, rows.offsets.back()}, sum[2];
   MPI_Allreduce(in, sum, 2, MPI_LONG_LONG, MPI_SUM, comm);
   rep.merged.merged_sensor_pairs = sum[0];
-  rep.num_sensor_edges = sum[1];
+  rep.num_sensor_edges = sum[1] / 2;  // each pair is in the rows of both its ends (no self-loops)
   return rows;
 }
 
