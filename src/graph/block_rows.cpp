@@ -276,8 +276,8 @@ void build_rows(MPI_Comm comm, BlockRows& R, std::vector<Id>& nbr, const GlobalI
   RoutedHalves<Id> H;
   route_halves(comm, blocks, ends, ne, R.width, vals, packed, H, R.peak_bytes);
   fill_rows(R, nbr, std::move(H));
-  bool dup = false;
-  for (std::int64_t t = 0; t < R.num_rows() && !dup; ++t)
+  bool dup = false;  // (only where a merge is given: a pass over every entry)
+  for (std::int64_t t = 0; t < R.num_rows() && !dup && merge; ++t)
     for (auto k = R.offsets[t] + 1; k < R.offsets[t + 1]; ++k)
       if (nbr[k] == nbr[k - 1]) {
         dup = true;

@@ -54,8 +54,8 @@ struct PartitionStats {
   GlobalId max_ghosts = 0;
   double seconds = 0.0;
   /// Seconds of its phases on this rank: gather (the edge lists to rank 0),
-  /// metis_graph (METIS's CSR), metis (the call) or bfs_graph and bfs,
-  /// scatter (the owners),
+  /// metis_graph (METIS's CSR), metis (the call) or bfs (bfs_graph first
+  /// where it builds its own rows from edges), scatter (the owners),
   /// or parmetis_graph and parmetis; stats.
   std::vector<std::pair<std::string, double>> phases;
   /// Bytes of the largest partitioner structures on this rank (METIS's or
@@ -65,8 +65,9 @@ struct PartitionStats {
 
 /// Distributed directory of node owners: rank r holds, for the global ids of
 /// its block (block_range(n, P, r)), each node's owner and its index among
-/// that owner's nodes, in ascending (key, global id) order (keys: all 0 when
-/// none are given). Nothing of size n on any rank; lookups are all-to-alls.
+/// that owner's nodes: block by block, within a block in ascending (key,
+/// global id) order (keys: all 0 when none are given), so that a block's
+/// nodes of one owner take consecutive indices there. Nothing of size n on any rank; lookups are all-to-alls.
 /// Holds its own duplicate communicator.
 class OwnerDirectory {
  public:
@@ -268,14 +269,14 @@ class DistGraph {
   HaloPlan& halo() { return halo_; }
   const HaloPlan& halo() const { return halo_; }
 
-  /// Seconds spent in the constructor's phases on this rank (exchange, csr,
-  /// order, halo), for the setup report.
+  /// Seconds spent in the constructor's phases on this rank (slots,
+  /// exchange, lists, order, csr, halo), for the setup report.
   const std::vector<std::pair<std::string, double>>& build_phases() const { return build_phases_; }
 
   /// Undirected edges whose ends have different owners (same on every rank).
   GlobalId edge_cut() const { return edge_cut_; }
-  /// Largest bytes of the constructor's temporaries on this rank (edge
-  /// records, neighbour lists), for the memory accounting.
+  /// Largest bytes of the constructor's temporaries on this rank (block
+  /// rows, neighbour lists, send buffers), for the memory accounting.
   std::int64_t build_peak_bytes() const { return build_peak_bytes_; }
 
   /// Bytes held by the graph's arrays (capacities), halo buffers included.
