@@ -8,11 +8,22 @@
 // The partition is a function of the graph and the number of parts alone:
 // for each range (its nodes and parts [p0, p1)), in up to kRounds rounds,
 //   s = the range's unvisited node of largest degree (smallest id on ties),
-//   a pass from s over the unvisited nodes reaches T, s's component;
-//   r = T's node of smallest id among those farthest from s,
+//   a probe from s over the unvisited nodes, following from each node only
+//   the first kProbeDegree entries of its row (smallest neighbour ids),
+//   reaches P; if P holds at least 1/kProbeShare of the range's unvisited nodes,
+//   r = P's node of smallest id among those farthest from s in the probe;
+//   otherwise (a probe that died out early) a pass from s over all the
+//   edges reaches s's component, and r = its node of smallest id among
+//   those farthest from s;
+//   T = r's component (s's) among the unvisited nodes,
 //   key(v) = base + (distance from r within T) for v in T, base += the
 //   largest distance + 1;
-// a round after the first runs only while more than 1/64 of the range is
+// r only needs to lie far from the middle of T. The probe reads one cache
+// line of a row and a quarter of the neighbours' labels, and sends few
+// visits to other blocks (the smallest ids of a row are mostly in the lowest
+// blocks); on the default 10M network it reaches 40% of the nodes and costs
+// a fraction of a full pass (docs/performance.md, "The bfs probe").
+// A round after the first runs only while more than 1/64 of the range is
 // unvisited (a bound on the rounds' cost, not on the result: the rest comes
 // last whatever its keys, and no split falls in a rest that small); what is
 // left gets key = base. The first
@@ -22,6 +33,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <limits>
 #include <string>
 #include <vector>
@@ -34,15 +48,21 @@ namespace {
 
 constexpr int kRounds = 8;           // passes per range and depth: components handled one by one
 constexpr std::int64_t kBins = 256;  // bins per round of the distributed selection
-// Labels of one byte up to 128 parts: at most 64 ranges per depth, labels up
-// to 3 * 63 + 2 = 191, and 255 for done.
-constexpr int kByteLabelParts = 128;
+constexpr std::int64_t kProbeDegree = 4;  // row entries a probe follows
+constexpr long long kProbeShare = 8;       // a probe reaching less of its range died out early
+// A node's label: kStages * (its range) + its stage in the round.
+constexpr int kStages = 4;
+enum Stage : std::int32_t { kUnvisited = 0, kProbed = 1, kSwept = 2, kOrdered = 3 };
+// Labels of one byte up to 127 parts: at most 63 ranges per depth, labels up
+// to 4 * 62 + 3 = 251, and 255 for done.
+constexpr int kByteLabelParts = 127;
 constexpr std::int64_t kLevelSlack = 256;  // a split at a level boundary may miss the proportional count by size / 256
 
 // A visit that crosses to another block: the node's offset in that block and
-// the label it must carry to be visited (its range's, one stage earlier).
+// the label it gets (its range's, at the pass's stage) if it carries one of
+// the same range at an earlier stage.
 struct Visit {
-  std::int32_t v, want;
+  std::int32_t v, to;
 };
 
 // One recursion depth's range.
@@ -65,6 +85,7 @@ class LevelBisection {
         first_(blocks.first[rank_]),
         nb_(static_cast<std::int32_t>(lx.size() - 1)),
         max_levels_(max_levels),
+        trace_(rank_ == 0 && std::getenv("SNL_BFS_TRACE") && std::strcmp(std::getenv("SNL_BFS_TRACE"), "1") == 0),
         label_(static_cast<std::size_t>(nb_), 0),
         level_(static_cast<std::size_t>(nb_), 0),
         frontier_(static_cast<std::size_t>(nb_)),
@@ -98,12 +119,14 @@ class LevelBisection {
   }
 
  private:
-  std::int64_t range_of(std::int32_t v) const { return label_[v] / 3; }
+  std::int64_t range_of(std::int32_t v) const { return label_[v] / kStages; }
   GlobalId gid(std::int32_t v) const { return first_ + v; }
   bool rounds(std::vector<std::int32_t>& base);
-  bool pass(const std::vector<GlobalId>& roots, const std::vector<std::int32_t>& start, int stage,
-            std::vector<std::int32_t>& far_level, std::vector<GlobalId>& far_gid);
-  void visit(Label* lab, std::int32_t* lev, std::int32_t u, std::int32_t want, std::int32_t level);
+  bool far_roots(const std::vector<GlobalId>& s, const std::vector<long long>& left,
+                 const std::vector<std::int32_t>& zero, std::vector<GlobalId>& r);
+  bool pass(const std::vector<GlobalId>& roots, const std::vector<std::int32_t>& start, Stage stage,
+            std::vector<std::int32_t>& far_level, std::vector<GlobalId>& far_gid, std::vector<long long>* reach);
+  void visit(Label* lab, std::int32_t* lev, std::int32_t u, std::int32_t to, std::int32_t level);
   bool exchange(std::size_t nf);
   template <class Items>
   void select(const std::vector<std::int64_t>& need, std::vector<std::int64_t> hi, std::vector<std::int64_t>& t,
@@ -118,8 +141,11 @@ class LevelBisection {
   GlobalId first_;
   std::int32_t nb_;
   std::int64_t max_levels_;
-  // label: 3 i + stage for a node of active range i (0 unvisited, 1 reached
-  // by the sweep from s, 2 ordered from r), kDone once its part is known.
+  bool trace_;  // SNL_BFS_TRACE=1 on rank 0: it prints each pass (stderr)
+  int depth_ = 0;
+  // label: kStages i + stage for a node of active range i (Stage: unvisited,
+  // reached by the probe or the pass from s, ordered from r), kDone once its
+  // part is known.
   // One byte where the labels fit: the passes read it at random once per
   // edge, and a quarter of the bytes stays in cache.
   static constexpr Label kDone = std::numeric_limits<Label>::max();
@@ -128,19 +154,21 @@ class LevelBisection {
   std::vector<Range> ranges_;
   std::vector<std::int32_t> frontier_, next_;  // nb each: a level holds each node once
   std::size_t n_next_ = 0;
-  // Per pass: the farthest level of each range and the smallest id there.
+  // Per pass: the farthest level of each range, the smallest id there, and
+  // the nodes visited.
   std::vector<std::int32_t> far_level_;
+  std::vector<long long> visited_;
   std::vector<GlobalId> far_gid_;
   std::int32_t step_ = 0;
   std::vector<std::int32_t> start_;
   // This level's visits to other blocks.
   struct Remote {
     GlobalId u;
-    std::int32_t want;
+    std::int32_t to;
   };
   std::vector<Remote> remote_;
   std::size_t n_remote_ = 0;
-  // The visits to other blocks sent this pass, by (node, want), in a
+  // The visits to other blocks sent this pass, by (node, to), in a
   // direct-mapped table: a node of another block is reached by each of its
   // neighbours in this block (half of them on average at degree 16 on 2
   // ranks, the numbering being random), and its owner ignores every visit
@@ -154,17 +182,20 @@ class LevelBisection {
   MPI_Datatype visit_type_;
 };
 
-// Marks u visited (want -> want + 1) at `level` if it carries `want`; raw
-// pointers, because a store through a one-byte label may alias everything
-// else and would make the compiler reload every vector's data each time.
+// Marks u visited (label `to`) at `level` if it carries a label of to's
+// range at an earlier stage; raw pointers, because a store through a
+// one-byte label may alias everything else and would make the compiler
+// reload every vector's data each time.
 template <class Index, class Label>
-inline void LevelBisection<Index, Label>::visit(Label* lab, std::int32_t* lev, std::int32_t u, std::int32_t want,
+inline void LevelBisection<Index, Label>::visit(Label* lab, std::int32_t* lev, std::int32_t u, std::int32_t to,
                                                 std::int32_t level) {
-  if (lab[u] != want) return;
-  lab[u] = static_cast<Label>(want + 1);
+  const std::int32_t l = lab[u];
+  if (l >= to || l < to - to % kStages) return;  // kDone is above every label
+  lab[u] = static_cast<Label>(to);
   lev[u] = level;
   next_[n_next_++] = u;
-  far_level_[want / 3] = level;  // levels only grow within a pass
+  far_level_[to / kStages] = level;  // levels only grow within a pass
+  ++visited_[to / kStages];
 }
 
 // The visits of this level to other blocks (remote_), by destination, in one
@@ -185,7 +216,7 @@ bool LevelBisection<Index, Label>::exchange(std::size_t nf) {
   std::copy(sdisp_.begin(), sdisp_.end(), rdisp_.begin());  // fill cursors
   for (std::size_t k = 0; k < n_remote_; ++k) {
     const int r = blocks_.of(remote_[k].u);
-    sbuf_[rdisp_[r]++] = {static_cast<std::int32_t>(remote_[k].u - blocks_.first[r]), remote_[k].want};
+    sbuf_[rdisp_[r]++] = {static_cast<std::int32_t>(remote_[k].u - blocks_.first[r]), remote_[k].to};
   }
   for (int r = 0; r < size_; ++r) {
     sinfo_[2 * r] = scount_[r];
@@ -206,20 +237,23 @@ bool LevelBisection<Index, Label>::exchange(std::size_t nf) {
                 visit_type_, comm_);
   Label* lab = label_.data();
   std::int32_t* lev = level_.data();
-  for (const Visit& x : rbuf_) visit(lab, lev, x.v, x.want, start_[x.want / 3] + step_);
+  for (const Visit& x : rbuf_) visit(lab, lev, x.v, x.to, start_[x.to / kStages] + step_);
   return true;
 }
 
-// One breadth-first pass of every range with a root (roots[i] >= 0) from
-// stage - 1 to `stage`, levels counted from start[i]; far_level (every
-// range's largest level) and far_gid (the smallest id there) over all
+// One breadth-first pass of every range with a root (roots[i] >= 0) to
+// `stage`, over the nodes of the range at an earlier stage, levels counted
+// from start[i]; a probe (kProbed) follows the first kProbeDegree entries of
+// each row only. far_level (every range's largest level), far_gid (the
+// smallest id there) and, where asked, reach (the nodes visited) over all
 // ranks. Collective; false when it ran past max_levels (on every rank).
 template <class Index, class Label>
 bool LevelBisection<Index, Label>::pass(const std::vector<GlobalId>& roots, const std::vector<std::int32_t>& start,
-                                        int stage, std::vector<std::int32_t>& far_level,
-                                        std::vector<GlobalId>& far_gid) {
+                                        Stage stage, std::vector<std::int32_t>& far_level,
+                                        std::vector<GlobalId>& far_gid, std::vector<long long>* reach) {
   const std::size_t nr = ranges_.size();
   far_level_.assign(nr, -1);
+  visited_.assign(nr, 0);
   start_ = start;
   n_next_ = 0;
   step_ = 0;
@@ -227,11 +261,13 @@ bool LevelBisection<Index, Label>::pass(const std::vector<GlobalId>& roots, cons
   std::int32_t* lev = level_.data();
   const std::int64_t* off = lx_.data();
   const Index* adj = ladj_.data();
+  const std::int64_t row_cap = stage == kProbed ? kProbeDegree : std::numeric_limits<std::int64_t>::max();
+  auto row_end = [&](std::int32_t v) { return off[v + 1] - off[v] > row_cap ? off[v] + row_cap : off[v + 1]; };
   sent_.assign(std::size_t{1} << kSentBits, Remote{-1, -1});
   Remote* sent = sent_.data();
   for (std::size_t i = 0; i < nr; ++i)
     if (roots[i] >= first_ && roots[i] < first_ + nb_)
-      visit(lab, lev, static_cast<std::int32_t>(roots[i] - first_), static_cast<std::int32_t>(3 * i + stage - 1),
+      visit(lab, lev, static_cast<std::int32_t>(roots[i] - first_), static_cast<std::int32_t>(kStages * i + stage),
             start[i]);
   for (std::int64_t level = 0;; ++level) {
     frontier_.swap(next_);
@@ -246,12 +282,12 @@ bool LevelBisection<Index, Label>::pass(const std::vector<GlobalId>& roots, cons
       if (h + 12 < nf) __builtin_prefetch(off + fr[h + 12]);
       if (h + 6 < nf) __builtin_prefetch(adj + off[fr[h + 6]]);
       if (h + 3 < nf)
-        for (std::int64_t k = off[fr[h + 3]]; k < off[fr[h + 3] + 1]; ++k) {
+        for (std::int64_t k = off[fr[h + 3]], e = row_end(fr[h + 3]); k < e; ++k) {
           const auto d = static_cast<std::uint64_t>(static_cast<GlobalId>(adj[k]) - first_);
           if (d < static_cast<std::uint64_t>(nb_)) __builtin_prefetch(lab + d);
         }
-      const std::int32_t v = fr[h], want = static_cast<std::int32_t>(lab[v]) - 1, lv = start_[want / 3] + step_;
-      const std::int64_t k0 = off[v], k1 = off[v + 1];
+      const std::int32_t v = fr[h], to = static_cast<std::int32_t>(lab[v]), lv = start_[to / kStages] + step_;
+      const std::int64_t k0 = off[v], k1 = row_end(v);
       if (n_remote_ + static_cast<std::size_t>(k1 - k0) > remote_.size())
         remote_.resize(std::max(2 * remote_.size(), n_remote_ + static_cast<std::size_t>(k1 - k0)));
       Remote* rem = remote_.data();
@@ -259,15 +295,15 @@ bool LevelBisection<Index, Label>::pass(const std::vector<GlobalId>& roots, cons
         const GlobalId u = static_cast<GlobalId>(adj[k]);
         const auto d = static_cast<std::uint64_t>(u - first_);
         if (d < static_cast<std::uint64_t>(nb_)) {
-          visit(lab, lev, static_cast<std::int32_t>(d), want, lv);
+          visit(lab, lev, static_cast<std::int32_t>(d), to, lv);
           continue;
         }
         Remote& s = sent[(static_cast<std::uint64_t>(u) * 0x9E3779B97F4A7C15ULL ^
-                          static_cast<std::uint64_t>(want) * 0xC2B2AE3D27D4EB4FULL) >>
+                          static_cast<std::uint64_t>(to) * 0xC2B2AE3D27D4EB4FULL) >>
                          (64 - kSentBits)];
-        if (s.u == u && s.want == want) continue;
-        s = {u, want};
-        rem[n_remote_++] = {u, want};
+        if (s.u == u && s.to == to) continue;
+        s = {u, to};
+        rem[n_remote_++] = {u, to};
       }
     }
     if (!exchange(nf)) break;
@@ -276,19 +312,29 @@ bool LevelBisection<Index, Label>::pass(const std::vector<GlobalId>& roots, cons
   far_level.resize(nr);
   far_gid.resize(nr);
   MPI_Allreduce(far_level_.data(), far_level.data(), static_cast<int>(nr), MPI_INT32_T, MPI_MAX, comm_);
-  // The smallest id at each range's largest level.
+  // The smallest id at each range's largest level, and the nodes reached.
   far_gid_.assign(nr, std::numeric_limits<GlobalId>::max());
   for (std::int32_t v = 0; v < nb_; ++v) {
-    if (lab[v] == kDone || lab[v] % 3 != stage) continue;
+    if (lab[v] == kDone || lab[v] % kStages != stage) continue;
     const auto i = static_cast<std::size_t>(range_of(v));
     if (lev[v] == far_level[i] && gid(v) < far_gid_[i]) far_gid_[i] = gid(v);
   }
   MPI_Allreduce(far_gid_.data(), far_gid.data(), static_cast<int>(nr), MPI_INT64_T, MPI_MIN, comm_);
+  std::vector<long long> all(nr, 0);
+  MPI_Allreduce(visited_.data(), all.data(), static_cast<int>(nr), MPI_LONG_LONG, MPI_SUM, comm_);
+  if (reach) *reach = all;
+  static const char* const kName[] = {"", "probe", "pass from s", "pass from r"};
+  for (std::size_t i = 0; trace_ && i < nr; ++i)
+    if (roots[i] >= 0)
+      std::fprintf(stderr, "bfs: depth %d, range %zu of %lld nodes, %s %lld: %d levels, %lld nodes reached\n", depth_,
+                   i, static_cast<long long>(ranges_[i].size), kName[stage], static_cast<long long>(roots[i]),
+                   far_level[i] - start[i] + 1, all[i]);
   return true;
 }
 
-// The rounds of one depth: each range's components, one pass from s and
-// one from r each; base[i] the key after the last. False past max_levels.
+// The rounds of one depth: each range's components, a probe (or, where it
+// died out early, a pass) from s and a pass from r each; base[i] the key
+// after the last. False past max_levels.
 template <class Index, class Label>
 bool LevelBisection<Index, Label>::rounds(std::vector<std::int32_t>& base) {
   const std::size_t nr = ranges_.size();
@@ -303,7 +349,7 @@ bool LevelBisection<Index, Label>::rounds(std::vector<std::int32_t>& base) {
     std::fill(deg.begin(), deg.end(), -1);
     std::fill(s.begin(), s.end(), std::numeric_limits<GlobalId>::max());
     for (std::int32_t v = 0; v < nb_; ++v) {
-      if (label_[v] == kDone || label_[v] % 3 != 0) continue;
+      if (label_[v] == kDone || label_[v] % kStages != kUnvisited) continue;
       const auto i = static_cast<std::size_t>(range_of(v));
       ++left[i];
       const std::int64_t d = lx_[v + 1] - lx_[v];
@@ -322,12 +368,42 @@ bool LevelBisection<Index, Label>::rounds(std::vector<std::int32_t>& base) {
     MPI_Allreduce(s.data(), roots.data(), static_cast<int>(nr), MPI_INT64_T, MPI_MIN, comm_);
     for (std::size_t i = 0; i < nr; ++i)
       if (roots[i] == std::numeric_limits<GlobalId>::max()) roots[i] = -1;
-    if (!pass(roots, zero, 1, far_level, far_gid)) return false;
-    for (std::size_t i = 0; i < nr; ++i) r[i] = roots[i] >= 0 ? far_gid[i] : -1;
-    if (!pass(r, base, 2, far_level, far_gid)) return false;
+    if (!far_roots(roots, left_all, zero, r)) return false;
+    if (!pass(r, base, kOrdered, far_level, far_gid, nullptr)) return false;
     for (std::size_t i = 0; i < nr; ++i)
       if (r[i] >= 0) base[i] = far_level[i] + 1;
   }
+  return true;
+}
+
+// r[i]: range i's node of smallest id farthest from s[i] (-1 where s[i] is),
+// by the probe where it reached at least 1/kProbeShare of the left[i] unvisited
+// nodes, else by a full pass from s[i] (also where the probe ran past
+// max_levels: the nodes it marked are taken again). False where that pass
+// did.
+template <class Index, class Label>
+bool LevelBisection<Index, Label>::far_roots(const std::vector<GlobalId>& s, const std::vector<long long>& left,
+                                             const std::vector<std::int32_t>& zero, std::vector<GlobalId>& r) {
+  const std::size_t nr = ranges_.size();
+  std::vector<std::int32_t> far_level;
+  std::vector<GlobalId> far_gid, again(nr, -1);
+  std::vector<long long> reach;
+  const bool probed = pass(s, zero, kProbed, far_level, far_gid, &reach);
+  bool any = false;
+  for (std::size_t i = 0; i < nr; ++i) {
+    r[i] = -1;
+    if (s[i] < 0) continue;
+    if (probed && kProbeShare * reach[i] >= left[i]) {
+      r[i] = far_gid[i];
+    } else {
+      again[i] = s[i];
+      any = true;
+    }
+  }
+  if (!any) return true;
+  if (!pass(again, zero, kSwept, far_level, far_gid, nullptr)) return false;
+  for (std::size_t i = 0; i < nr; ++i)
+    if (again[i] >= 0) r[i] = far_gid[i];
   return true;
 }
 
@@ -392,7 +468,9 @@ void LevelBisection<Index, Label>::split(const std::vector<std::int32_t>& base, 
     need[i] = g.size * (pm - g.p0) / (g.p1 - g.p0);
     hi[i] = base[i];
   }
-  auto key = [&](std::int32_t v) -> std::int64_t { return label_[v] % 3 == 0 ? base[range_of(v)] : level_[v]; };
+  auto key = [&](std::int32_t v) -> std::int64_t {
+    return label_[v] % kStages == kOrdered ? level_[v] : base[range_of(v)];
+  };
   select(need, hi, kt, kbelow, kat, [&](auto&& f) {
     for (std::int32_t v = 0; v < nb_; ++v)
       if (label_[v] != kDone) f(static_cast<std::size_t>(range_of(v)), key(v));
@@ -440,7 +518,7 @@ void LevelBisection<Index, Label>::split(const std::vector<std::int32_t>& base, 
     const int c = low ? 0 : 1;
     const Range& g = ranges_[i];
     if (child[2 * i + c] >= 0) {
-      label_[v] = static_cast<Label>(3 * child[2 * i + c]);
+      label_[v] = static_cast<Label>(kStages * child[2 * i + c]);
     } else {
       owner[v] = low ? g.p0 : g.p0 + (g.p1 - g.p0) / 2;
       label_[v] = kDone;
@@ -460,6 +538,7 @@ bool LevelBisection<Index, Label>::run(int nparts, std::vector<int>& owner) {
   while (!ranges_.empty()) {
     if (!rounds(base)) return false;
     split(base, owner);
+    ++depth_;
   }
   return true;
 }

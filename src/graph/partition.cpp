@@ -328,8 +328,8 @@ std::string route_halves(MPI_Comm comm, const Blocks& blocks, const std::vector<
 }
 
 // root_csr, step 2: the rows of this rank's block of nb nodes: counted,
-// filled, each sorted where `sorted` (the bfs partition on every rank does
-// not depend on the order in a row). Two levels, as DistGraph's neighbour lists: the
+// filled, each sorted by neighbour id (the bfs probes follow a row's first
+// entries). Two levels, as DistGraph's neighbour lists: the
 // half-edges go into buckets of consecutive rows (few write streams), then
 // each bucket's rows are counted and filled in cache (counting and filling
 // straight into the block's rows waited on a cache miss per half-edge: 1.2 s
@@ -337,7 +337,7 @@ std::string route_halves(MPI_Comm comm, const Blocks& blocks, const std::vector<
 // of memory.
 template <class Offset, class Index>
 bool block_rows(std::int64_t nb, std::vector<HalfRow<Index>>&& keep, std::vector<HalfRow<Index>>&& got,
-                std::vector<Offset>& lx, std::vector<Index>& ladj, std::int64_t& bytes, bool sorted = true) {
+                std::vector<Offset>& lx, std::vector<Index>& ladj, std::int64_t& bytes) {
   constexpr std::int64_t kBuckets = 1024;
   bool ok = true;
   try {
@@ -376,7 +376,7 @@ bool block_rows(std::int64_t nb, std::vector<HalfRow<Index>>&& keep, std::vector
   }
   release(keep);
   release(got);
-  for (std::int64_t v = 0; v < nb && ok && sorted; ++v) std::sort(ladj.begin() + lx[v], ladj.begin() + lx[v + 1]);
+  for (std::int64_t v = 0; v < nb && ok; ++v) std::sort(ladj.begin() + lx[v], ladj.begin() + lx[v + 1]);
   return ok;
 }
 
@@ -654,7 +654,7 @@ std::string bfs_blocks_impl(MPI_Comm comm, GlobalId n, const std::vector<GlobalI
   if (!why.empty()) return why;
   std::vector<std::int64_t> lx;
   std::vector<Index> ladj;
-  if (!all_ranks(comm, block_rows(nb, std::move(keep), std::move(got), lx, ladj, rows, false)))
+  if (!all_ranks(comm, block_rows(nb, std::move(keep), std::move(got), lx, ladj, rows)))
     return "out of memory building the partition's graph";
   if (mark) mark("bfs_graph");
   peak = std::max({peak, routed, rows});

@@ -2,7 +2,8 @@
 // (detail::bfs_blocks, src/graph/level_bisection.cpp) against a plain serial
 // twin of its definition, on 1, 2 and 3 ranks and for part counts other than
 // the rank count: shuffled grids with several components, random geometric
-// graphs, isolated nodes, duplicate pairs, more parts than nodes; and the
+// graphs, isolated nodes, duplicate pairs, more parts than nodes, a hub
+// whose probe dies out at once (r from a full pass); and the
 // level limit, agreed by every rank.
 #include <gtest/gtest.h>
 #include <mpi.h>
@@ -76,6 +77,26 @@ Graph geometric(int n, double r, unsigned seed) {
   return from_pairs(n, p);
 }
 
+// A hub (the node of largest degree) whose 4 smallest neighbours are
+// leaves, joined to the corner of a shuffled 20x20 grid: its probe dies out
+// at once, and r comes from a full pass.
+Graph hub() {
+  const int side = 20, m = side * side, hub_id = 4;
+  std::vector<int> id(m);
+  std::iota(id.begin(), id.end(), 5);
+  std::shuffle(id.begin(), id.end(), std::mt19937(11));
+  std::vector<std::pair<int, int>> p;
+  for (int leaf = 0; leaf < 4; ++leaf) p.emplace_back(hub_id, leaf);
+  for (int y = 0; y < side; ++y)
+    for (int x = 0; x < side; ++x) {
+      const int v = y * side + x;
+      if (x + 1 < side) p.emplace_back(id[v], id[v + 1]);
+      if (y + 1 < side) p.emplace_back(id[v], id[v + side]);
+      if (x < 3 && y < 3) p.emplace_back(hub_id, id[v]);
+    }
+  return from_pairs(m + 5, p);
+}
+
 Graph path(int n) {
   std::vector<std::pair<int, int>> p;
   for (int i = 0; i + 1 < n; ++i) p.emplace_back((i * 7) % n, ((i + 1) * 7) % n);  // 7 coprime to n
@@ -84,13 +105,18 @@ Graph path(int n) {
 
 // The twin: the definition of level_bisection.cpp written plainly (sets,
 // maps, recursion).
-std::map<int, int> distances(const Graph& g, int root, const std::set<int>& within) {
+// Distances from root within `within`; a probe follows from each node the
+// first 4 entries of its row by id (duplicates included) only.
+std::map<int, int> distances(const Graph& g, int root, const std::set<int>& within, bool probe = false) {
   std::map<int, int> d{{root, 0}};
   std::deque<int> q{root};
   while (!q.empty()) {
     const int v = q.front();
     q.pop_front();
-    for (int u : g.rows[v])
+    std::vector<int> row = g.rows[v];
+    std::sort(row.begin(), row.end());
+    if (probe && row.size() > 4) row.resize(4);
+    for (int u : row)
       if (within.count(u) && !d.count(u)) d[u] = d[v] + 1, q.push_back(u);
   }
   return d;
@@ -114,7 +140,10 @@ void twin_split(const Graph& g, const std::vector<int>& nodes, int p0, int p1, s
     int s = *left.begin();
     for (int v : left)
       if (g.rows[v].size() > g.rows[s].size()) s = v;  // ascending: ties keep the smallest id
-    const auto ds = distances(g, s, left);
+    // r: farthest from s by the probe, or by a full pass where the probe
+    // reached under 1/8 of the nodes left.
+    auto ds = distances(g, s, left, true);
+    if (ds.size() * 8 < left.size()) ds = distances(g, s, left);
     int far = 0, r = s;
     for (auto [v, d] : ds)
       if (d > far) far = d, r = v;  // ascending ids: the first at the largest distance
@@ -199,6 +228,7 @@ TEST(DistributedBfs, EqualsItsTwin) {
       {"3 grids 12x12 + 9 isolated", grids(12, 3, 9, 5)},
       {"grid 30x30", grids(30, 1, 0, 6)},
       {"path 97", path(97)},
+      {"hub whose probe dies out", hub()},
       {"1 node", from_pairs(1, {})},
       {"2 nodes", from_pairs(2, {{0, 1}})},
       {"5 nodes, no pair", from_pairs(5, {})},
