@@ -8,6 +8,7 @@
 
 #include "graph/partition_detail.hpp"
 #include "snl/io/network.hpp"
+#include "snl/problem/analysis.hpp"
 #include "solve_helpers.hpp"
 
 using namespace snl;
@@ -155,6 +156,31 @@ TEST(Problem, TruthAndFlagsReachTheOwnersFromAnySlab) {
       }
       EXPECT_EQ(bad, 0) << "rank " << rank << (slab == &w ? ", block slabs" : ", every row on rank 0");
     }
+}
+
+// The connectivity report run by every rank (components of the owned
+// subgraph joined over the cut on rank 0) against the serial analysis: a
+// sparse network of many components, some within reach of the corner
+// anchors and some not, on bfs, METIS and block partitions.
+TEST(Problem, ConnectivityFlagsEqualTheSerialAnalysis) {
+  NetSpec s;
+  s.n = 3000;
+  s.radius = 0.025;  // mean degree about 6: hundreds of components
+  s.anchor_radius = 0.25;
+  const Network w = make_network(s);
+  const LocalizabilityReport serial = analyze_localizability(w, false);
+  ASSERT_GT(serial.unanchored_components, 10);
+  ASSERT_LT(serial.unanchored.size(), static_cast<std::size_t>(s.n / 2));
+  constexpr std::uint8_t kMask = kUnanchoredComponent | kFewMeasurements;
+  for (const PartitionMethod pm : {PartitionMethod::kBfs, PartitionMethod::kMetis, PartitionMethod::kBlock}) {
+    const LocalizationProblem prob(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), pm, nullptr);
+    int bad = 0;
+    for (LocalId v = 0; v < prob.graph().num_owned(); ++v) {
+      const GlobalId g = prob.graph().global_id(v);
+      bad += (prob.flags()[v] & kMask) != (serial.flags[g] & kMask);
+    }
+    EXPECT_EQ(bad, 0) << "rank " << world_rank() << ", partition " << static_cast<int>(pm);
+  }
 }
 
 // The serial twin of the partition's graph: every pair's two half-edges
