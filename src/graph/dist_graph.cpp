@@ -6,6 +6,7 @@
 #include <limits>
 #include <numeric>
 #include <stdexcept>
+#include <type_traits>
 
 #include "graph/partition_detail.hpp"
 #include "snl/core/mpi_util.hpp"
@@ -36,20 +37,6 @@ bool setup_wide_ids(MPI_Comm comm, GlobalId n) {
 }
 
 namespace {
-// Copies one edge's `width` values. std::copy with a run-time count became a
-// call to memmove per edge (80M calls per rank at 10M sensors in the lists
-// alone); the usual one or two values are copied inline.
-inline void copy_values(const double* src, double* dst, int width) {
-  if (width == 1) {
-    dst[0] = src[0];
-  } else if (width == 2) {
-    dst[0] = src[0];
-    dst[1] = src[1];
-  } else if (width > 2) {  // (none: memcpy's pointers may not be null, and a graph without values has none)
-    std::memcpy(dst, src, sizeof(double) * static_cast<std::size_t>(width));
-  }
-}
-
 // One neighbour of an owned node: its global id and directory slot
 // (OwnerDirectory::Slot), so that no later pass reads the edge records again.
 template <class Id>
@@ -76,7 +63,8 @@ void sort_degree_windows(std::vector<std::int64_t>& grp, const std::vector<std::
 // The adjacency of one group (interior or boundary) in group positions
 // (32-bit), neighbours in list order; nbr(k) is entry k's owned index, or -1
 // for a ghost. The scattered nodes -> cnt -> entries -> pos lookups are done
-// once here instead of in each of the two BFS sweeps of rcm_order.
+// once here instead of in each of the two BFS sweeps of rcm_order. `spare`:
+// a buffer to build the adjacency in (taken; rcm_order gives it back).
 struct GroupGraph {
   std::vector<std::int64_t> off;
   std::vector<std::int32_t> adj, deg;
@@ -84,10 +72,12 @@ struct GroupGraph {
 
 template <class Nbr>
 GroupGraph group_graph(const std::vector<std::int64_t>& nodes, const std::vector<std::int64_t>& cnt, Nbr&& nbr,
-                       const std::vector<std::int32_t>& pos) {
+                       const std::vector<std::int32_t>& pos, std::vector<std::int32_t>& spare) {
   const std::size_t m = nodes.size();
   GroupGraph g;
   g.off.assign(m + 1, 0);
+  g.adj = std::move(spare);
+  g.adj.clear();
   {
     std::size_t total = 0;
     for (std::size_t t = 0; t < m; ++t) total += std::size_t(cnt[nodes[t] + 1] - cnt[nodes[t]]);
@@ -218,8 +208,9 @@ class CuthillMcKee {
 template <class Nbr>
 std::vector<std::int64_t> rcm_order(const std::vector<std::int64_t>& nodes, const std::vector<std::int64_t>& cnt,
                                     Nbr&& nbr, const std::vector<std::int32_t>& pos,
-                                    const std::vector<std::int64_t>& seeds, const std::vector<std::int64_t>& ties) {
-  const GroupGraph g = group_graph(nodes, cnt, nbr, pos);
+                                    const std::vector<std::int64_t>& seeds, const std::vector<std::int64_t>& ties,
+                                    std::vector<std::int32_t>& spare) {
+  GroupGraph g = group_graph(nodes, cnt, nbr, pos, spare);
   const std::vector<std::int64_t> candidates = by_degree(g.deg, ties);
   CuthillMcKee cm(g);
   for (std::int64_t t : seeds)
@@ -233,6 +224,7 @@ std::vector<std::int64_t> rcm_order(const std::vector<std::int64_t>& nodes, cons
     cm.sweep(head);
   }
   std::vector<std::int64_t> order = std::move(cm.order);
+  spare = std::move(g.adj);
   std::reverse(order.begin(), order.end());
   for (auto& t : order) t = nodes[t];
   return order;
@@ -262,7 +254,6 @@ struct OwnedLists {
   std::vector<std::int32_t> by_gid;  // their owner-side indices in ascending global id
   std::vector<std::int64_t> cnt;  // owned index v: entries [cnt[v], cnt[v + 1])
   std::vector<Entry<Id>> entries;  // per node sorted by neighbour global id
-  std::vector<double> vals;       // `width` values per entry
   std::vector<char> boundary;     // owned index v has a neighbour on another rank
   int rank = 0, width = 0;
   std::int64_t peak_bytes = 0;    // the step's temporaries at their largest
@@ -383,11 +374,14 @@ struct RowHeader {
 // Where a block holder's rows go. The directory numbers an owner's nodes
 // block by block (OwnerDirectory), so this rank's rows for owner o take
 // consecutive indices there: in the owner's index order ("pack order"),
-// owner by owner, they are rows first[o] .. first[o + 1] of `hdr`.
+// owner by owner, they are pack positions first[o] .. first[o + 1]. Each
+// owner's part (its entries from this rank, in pack order) is sent as it
+// lands in the owner's lists.
 struct RowPlan {
-  std::vector<std::int64_t> rows_to, ents_to, first;  // per owner: rows, entries; first place in pack order
-  std::vector<RowHeader> hdr;  // in pack order: node and degree; by_gid: the owner's k-th node of this block by id
-  std::vector<std::int64_t> place;  // row t's first entry within its owner's part, in pack order
+  std::vector<std::int64_t> rows_to, ents_to, first;  // per owner: rows, entries; first pack position
+  std::vector<RowHeader> hdr;  // by pack position: node and degree; by_gid: the owner's k-th node of this block by id
+  std::vector<std::int32_t> row;      // by pack position: the block row
+  std::vector<std::int64_t> within;   // by pack position: the row's first entry within its owner's part
 };
 
 RowPlan plan_rows(const OwnerDirectory& dir, const BlockRows& R, int size) {
@@ -404,26 +398,25 @@ RowPlan plan_rows(const OwnerDirectory& dir, const BlockRows& R, int size) {
   }
   P.first.assign(static_cast<std::size_t>(size) + 1, 0);
   for (int o = 0; o < size; ++o) P.first[o + 1] = P.first[o] + P.rows_to[o];
-  std::vector<std::int64_t> at(static_cast<std::size_t>(nb)), seen(P.first.begin(), P.first.end() - 1);
+  std::vector<std::int64_t> seen(P.first.begin(), P.first.end() - 1);
   P.hdr.resize(static_cast<std::size_t>(nb));
+  P.row.resize(static_cast<std::size_t>(nb));
   for (std::int64_t t = 0; t < nb; ++t) {
     const auto& s = dir.local(R.begin + t);
     const std::int64_t p = P.first[s.owner] + (s.index - base[s.owner]);
     if (s.index < base[s.owner] || p >= P.first[s.owner + 1])
       throw std::logic_error("graph build: an owner's indices of one block are not consecutive");
-    at[static_cast<std::size_t>(t)] = p;
+    P.row[static_cast<std::size_t>(p)] = static_cast<std::int32_t>(t);
     P.hdr[static_cast<std::size_t>(p)].g = R.begin + t;
     P.hdr[static_cast<std::size_t>(p)].degree = static_cast<std::int32_t>(R.offsets[t + 1] - R.offsets[t]);
     P.hdr[static_cast<std::size_t>(seen[s.owner]++)].by_gid = s.index;  // the k-th in global id order
   }
-  std::vector<std::int64_t> within(static_cast<std::size_t>(nb));  // first entry of each place within its owner's part
+  P.within.resize(static_cast<std::size_t>(nb));
   for (int o = 0; o < size; ++o)
     for (std::int64_t p = P.first[o], a = 0; p < P.first[o + 1]; ++p) {
-      within[static_cast<std::size_t>(p)] = a;
+      P.within[static_cast<std::size_t>(p)] = a;
       a += P.hdr[static_cast<std::size_t>(p)].degree;
     }
-  P.place.resize(static_cast<std::size_t>(nb));
-  for (std::int64_t t = 0; t < nb; ++t) P.place[static_cast<std::size_t>(t)] = within[static_cast<std::size_t>(at[t])];
   return P;
 }
 
@@ -446,138 +439,180 @@ void receive_headers(MPI_Comm comm, RowPlan& P, OwnedLists<Id>& L, std::vector<s
     L.by_gid[i] = got[i].by_gid;
     L.cnt[i + 1] = L.cnt[i] + got[i].degree;
   }
+  if (L.cnt.back() > INT32_MAX) throw Error("graph build: more than 2^31 entries on one rank; use more ranks");
   seg.assign(static_cast<std::size_t>(size) + 1, 0);
   for (int r = 0; r < size; ++r) seg[r + 1] = seg[r] + rrows[r];
 }
 
-// The rows' entries with their neighbours' slots: this rank's own straight
-// into its lists (at L.cnt[seg[rank]]), the others into the send buffer by
-// owner (at sstart[o]). By chunks of rows: the slots looked up in one stream
-// (fetched ahead), then the rows in their own order, each written to its
-// place (one pass doing both waited on the lookups). Returns the entries
-// whose ends have different owners.
+// The entries leaving for other owners go in rounds: round c carries entries
+// [c * per_owner, (c + 1) * per_owner) of every owner's part, so that the
+// send and receive buffers stay small (kRoundBytes per rank) beside the rows
+// and the lists (a send buffer of all leaving entries was the build's
+// high-water mark). per_owner and count are the same on every rank.
+struct Rounds {
+  std::int64_t per_owner = 1;
+  int count = 0;
+  std::int64_t piece(std::int64_t total, int c) const {  // entries of a part of `total` in round c
+    return std::clamp<std::int64_t>(total - c * per_owner, 0, per_owner);
+  }
+  // A round's entries at most, parts of `total` (per rank; not this rank's own).
+  std::int64_t largest(const std::vector<std::int64_t>& total, int rank) const {
+    std::int64_t sum = 0;
+    for (std::size_t r = 0; r < total.size(); ++r)
+      if (static_cast<int>(r) != rank) sum += std::min(total[r], per_owner);
+    return sum;
+  }
+};
+
+Rounds plan_rounds(MPI_Comm comm, const RowPlan& P, std::size_t entry_bytes) {
+  std::int64_t round_bytes = std::int64_t(64) << 20;
+  if (const char* e = std::getenv("SNL_SETUP_ROUND_BYTES")) round_bytes = std::max(1LL, std::atoll(e));  // tests
+  const int size = comm_size(comm), rank = comm_rank(comm);
+  long long k = std::max<long long>(1, round_bytes / static_cast<long long>(entry_bytes * std::max(1, size - 1)));
+  MPI_Allreduce(MPI_IN_PLACE, &k, 1, MPI_LONG_LONG, MPI_MIN, comm);
+  long long most = 0;
+  for (int o = 0; o < size; ++o)
+    if (o != rank) most = std::max<long long>(most, (P.ents_to[o] + k - 1) / k);
+  MPI_Allreduce(MPI_IN_PLACE, &most, 1, MPI_LONG_LONG, MPI_MAX, comm);
+  if (most > INT32_MAX) throw Error("graph build: too many rounds");
+  return Rounds{k, static_cast<int>(most)};
+}
+
+// Calls f(t, j0, j1) for the pieces of block rows (row t's entries j0 .. j1)
+// that make up entries [k0, k1) of an owner's part, in pack order; `p`, a
+// pack position in that part, moves on with them (a piece may end mid-row).
+// The rows are read at random: their offsets and their data (at data(t))
+// are fetched ahead.
+template <class D, class F>
+void for_each_piece(const RowPlan& P, const BlockRows& R, std::int64_t k0, std::int64_t k1, std::int64_t& p, D&& data,
+                    F&& f) {
+  constexpr std::int64_t kOffsetsAhead = 16, kDataAhead = 8;
+  const auto np = static_cast<std::int64_t>(P.row.size());
+  while (k0 < k1) {
+    if (p + kOffsetsAhead < np) __builtin_prefetch(&R.offsets[P.row[static_cast<std::size_t>(p + kOffsetsAhead)]]);
+    if (p + kDataAhead < np) __builtin_prefetch(data(P.row[static_cast<std::size_t>(p + kDataAhead)]));
+    const std::int64_t t = P.row[static_cast<std::size_t>(p)], b = P.within[static_cast<std::size_t>(p)];
+    const std::int64_t deg = R.offsets[t + 1] - R.offsets[t], j1 = std::min(deg, k1 - b);
+    if (j1 > k0 - b) f(t, k0 - b, j1);
+    k0 = b + j1;
+    if (j1 == deg) ++p;
+  }
+}
+
+// Entries [k0, k1) of owner o's part with their neighbours' slots, to `dst`:
+// by chunks, the ids gathered from their rows, then the slots looked up in
+// one stream (fetched ahead). Returns the entries whose ends have different
+// owners.
 template <class Id>
-std::int64_t pack_entries(const OwnerDirectory& dir, const BlockRows& R, const std::vector<Id>& nbr,
-                          const RowPlan& P, NeighbourSlots<Id>& slots, std::int64_t own_first,
-                          const std::vector<std::int64_t>& sstart, OwnedLists<Id>& L, Entry<Id>* sbuf) {
+std::int64_t pack_part(const RowPlan& P, const BlockRows& R, const std::vector<Id>& nbr, NeighbourSlots<Id>& slots,
+                       int o, std::int64_t k0, std::int64_t k1, std::int64_t& p, Entry<Id>* dst) {
   constexpr std::int64_t kAhead = 32, kChunk = 1 << 15;  // lookups in flight; entries per chunk (in cache)
-  const int rank = L.rank;
-  const std::int64_t nb = R.num_rows(), ne = static_cast<std::int64_t>(nbr.size());
-  const Id* ids = nbr.data();
-  std::vector<OwnerDirectory::Slot> sl;
+  auto ids_at = [&](std::int64_t t) { return nbr.data() + R.offsets[t]; };
   std::int64_t cut = 0;
-  for (std::int64_t t0 = 0; t0 < nb;) {
-    const std::int64_t k0 = R.offsets[t0];
-    std::int64_t t1 = t0 + 1;  // at least one row, a hub's too
-    while (t1 < nb && R.offsets[t1 + 1] - k0 <= kChunk) ++t1;
-    const std::int64_t k1 = R.offsets[t1];
-    if (sl.size() < static_cast<std::size_t>(k1 - k0)) sl.resize(static_cast<std::size_t>(k1 - k0));
-    for (std::int64_t k = k0; k < k1; ++k) {
-      if (k + kAhead < ne) __builtin_prefetch(slots.address(static_cast<GlobalId>(ids[k + kAhead])));
-      sl[static_cast<std::size_t>(k - k0)] = slots.at(static_cast<GlobalId>(ids[k]));
+  for (std::int64_t a = k0; a < k1; a += kChunk) {
+    const std::int64_t b = std::min(k1, a + kChunk);
+    Entry<Id>* e = dst + (a - k0);
+    Entry<Id>* w = e;
+    for_each_piece(P, R, a, b, p, ids_at, [&](std::int64_t t, std::int64_t j0, std::int64_t j1) {
+      for (const Id* src = nbr.data() + R.offsets[t]; j0 < j1; ++j0) (w++)->nbr = src[j0];
+    });
+    for (std::int64_t k = 0; k < b - a; ++k) {
+      if (k + kAhead < b - a) __builtin_prefetch(slots.address(static_cast<GlobalId>(e[k + kAhead].nbr)));
+      const auto& s = slots.at(static_cast<GlobalId>(e[k].nbr));
+      e[k].owner = s.owner;
+      e[k].index = s.index;
+      cut += s.owner != o;
     }
-    for (std::int64_t t = t0, k = k0; t < t1; ++t) {
-      const int o = dir.local(R.begin + t).owner;
-      Entry<Id>* ent = (o == rank ? L.entries.data() + own_first : sbuf + sstart[o]) + P.place[t];
-      for (; k < R.offsets[t + 1]; ++k, ++ent) {
-        const auto& s = sl[static_cast<std::size_t>(k - k0)];
-        cut += s.owner != o;
-        *ent = {ids[k], s.owner, s.index};
-      }
-    }
-    t0 = t1;
   }
   return cut;
 }
 
-// The rows' values, as pack_entries places the entries (`width` per entry).
-template <class Id>
-void pack_values(const OwnerDirectory& dir, const BlockRows& R, const RowPlan& P, std::int64_t own_first,
-                 const std::vector<std::int64_t>& sstart, OwnedLists<Id>& L, double* svals) {
-  const int width = R.width;
-  for (std::int64_t t = 0; t < R.num_rows(); ++t) {
-    const int o = dir.local(R.begin + t).owner;
-    double* val = (o == L.rank ? L.vals.data() + own_first * width : svals + sstart[o] * width) + P.place[t] * width;
-    std::copy(R.values.data() + R.offsets[t] * width, R.values.data() + R.offsets[t + 1] * width, val);
-  }
+// The order in which pack_part reads the parts: this rank's own whole, then
+// round by round each other owner's piece; f(o, k0, k1, p).
+template <class F>
+void for_each_part_piece(const RowPlan& P, const Rounds& rd, int rank, std::vector<std::int64_t>& p, F&& f) {
+  const int size = static_cast<int>(P.ents_to.size());
+  f(rank, std::int64_t(0), P.ents_to[rank], p[rank]);
+  for (int c = 0; c < rd.count; ++c)
+    for (int o = 0; o < size; ++o)
+      if (o != rank) f(o, c * rd.per_owner, c * rd.per_owner + rd.piece(P.ents_to[o], c), p[o]);
 }
 
-// The other owners' part of the lists (`width` items of T per entry),
-// received in place: block r's at the entries of its index range
-// [seg[r], seg[r + 1]). Consumes the send buffer.
-template <class T, class Id>
-void receive_in_place(MPI_Comm comm, std::vector<T>&& sbuf, int width, const std::vector<int>& scount,
-                      const std::vector<std::int64_t>& sstart, const std::vector<std::int64_t>& seg,
-                      const OwnedLists<Id>& L, T* lists) {
-  const int size = comm_size(comm);
-  std::vector<int> rcount(size), rdisp(size), sdisp(size), count(size);
-  for (int r = 0; r < size; ++r) {
-    const std::int64_t b = L.cnt[seg[r]], e = L.cnt[seg[r + 1]];
-    if (e > INT32_MAX / std::max(width, 1)) throw Error("graph build: more than 2^31 entries on one rank");
-    rcount[r] = r == L.rank ? 0 : static_cast<int>((e - b) * width);
-    rdisp[r] = static_cast<int>(b * width);
-    sdisp[r] = static_cast<int>(sstart[r] * width);
-    count[r] = scount[r] * width;
+// The ids whose slots are asked of sparse blocks, in the order pack_part
+// looks them up (NeighbourSlots hands the answers out in that order).
+template <class Id>
+void ask_slots(MPI_Comm comm, const RowPlan& P, const Rounds& rd, const BlockRows& R, const std::vector<Id>& nbr,
+               NeighbourSlots<Id>& slots) {
+  std::vector<std::vector<Id>> ask(static_cast<std::size_t>(comm_size(comm)));
+  if (slots.asks()) {
+    std::vector<std::int64_t> p(P.first.begin(), P.first.end() - 1);
+    for_each_part_piece(P, rd, comm_rank(comm), p, [&](int, std::int64_t k0, std::int64_t k1, std::int64_t& q) {
+      auto ids_at = [&](std::int64_t t) { return nbr.data() + R.offsets[t]; };
+      for_each_piece(P, R, k0, k1, q, ids_at, [&](std::int64_t t, std::int64_t j0, std::int64_t j1) {
+        for (const Id* src = nbr.data() + R.offsets[t]; j0 < j1; ++j0)
+          if (int r = 0; slots.asked(static_cast<GlobalId>(src[j0]), r)) ask[r].push_back(src[j0]);
+      });
+    });
   }
-  MPI_Datatype rec;
-  MPI_Type_contiguous(static_cast<int>(sizeof(T)), MPI_BYTE, &rec);
-  MPI_Type_commit(&rec);
-  MPI_Alltoallv(sbuf.data(), count.data(), sdisp.data(), rec, lists, rcount.data(), rdisp.data(), rec, comm);
-  MPI_Type_free(&rec);
-  release(sbuf);
+  slots.exchange(comm, ask);
 }
+
+// Per rank: `count` items of a round and where they begin (items of `width`
+// per entry, all below 2^31: receive_headers, plan_rounds).
+struct RoundCounts {
+  std::vector<int> scount, sdisp, rcount, rdisp;
+  explicit RoundCounts(int size) : scount(size), sdisp(size), rcount(size), rdisp(size) {}
+};
 
 // Step 1: every block row to the owner of its node, with its neighbours'
-// directory slots and its values; the owner's lists are the rows as received
-// (plan_rows: each block's rows arrive in the owner's index order, so they
-// land where the block's index range begins; a rank's own rows are copied
-// there, not sent to itself). Neighbours stay in global-id order. The
-// entries go first and the values after them, each round's send buffer and
-// inputs freed before the next (the build's high-water mark: 32 bytes per
-// entry against 42 with both at once, when half of them leave). Consumes the
-// rows. `cut`: this rank's entries whose ends have different owners (each cut
-// edge is counted by both of its rows).
+// directory slots (the values follow once the CSR is laid out:
+// values_to_csr). Each block's rows arrive in the owner's index order, so a
+// sender's part lands where its index range begins in the owner's lists
+// (`seg`); a rank's own part is written there, not sent to itself; the
+// others go in rounds (Rounds). Neighbours stay in global-id order. `cut`:
+// this rank's entries whose ends have different owners
+// (each cut edge is counted by both of its rows).
 template <class Id>
-OwnedLists<Id> rows_to_owners(MPI_Comm comm, const OwnerDirectory& dir, BlockRows&& R, std::vector<Id>& nbr,
-                              GlobalId& cut, PhaseClock& clock) {
-  const int size = comm_size(comm), rank = comm_rank(comm), width = R.width;
+OwnedLists<Id> rows_to_owners(MPI_Comm comm, const OwnerDirectory& dir, const BlockRows& R, std::vector<Id>& nbr,
+                              RowPlan& P, std::vector<std::int64_t>& seg, Rounds& rd, GlobalId& cut,
+                              PhaseClock& clock) {
+  const int size = comm_size(comm), rank = comm_rank(comm);
   OwnedLists<Id> L;
   L.rank = rank;
-  L.width = width;
-  RowPlan P = plan_rows(dir, R, size);
-  std::vector<std::int64_t> seg;
+  L.width = R.width;
+  P = plan_rows(dir, R, size);
   receive_headers(comm, P, L, seg);
+  rd = plan_rounds(comm, P, sizeof(Entry<Id>));
   NeighbourSlots<Id> slots(comm, dir, nbr);
-  {  // the ids asked of sparse blocks, in the order pack_entries reads them
-    std::vector<std::vector<Id>> ask(static_cast<std::size_t>(size));
-    if (slots.asks())
-      for (const Id u : nbr)
-        if (int r = 0; slots.asked(static_cast<GlobalId>(u), r)) ask[r].push_back(u);
-    slots.exchange(comm, ask);
-  }
+  ask_slots(comm, P, rd, R, nbr, slots);
   clock.done("slots");
-  std::vector<std::int64_t> sstart(static_cast<std::size_t>(size) + 1, 0);
-  for (int o = 0; o < size; ++o) sstart[o + 1] = o == rank ? 0 : P.ents_to[o];
-  std::vector<int> scount;
-  pack_offsets(sstart, scount, std::max(width, 1), "graph build");
-  const std::int64_t own_first = L.cnt[seg[rank]], leaving = sstart[size];
   L.entries.resize(static_cast<std::size_t>(L.cnt.back()));
-  std::vector<Entry<Id>> sbuf(static_cast<std::size_t>(leaving));
-  cut = pack_entries(dir, R, nbr, P, slots, own_first, sstart, L, sbuf.data());
-  const std::int64_t rows_bytes = R.memory_bytes() + static_cast<std::int64_t>(nbr.capacity() * sizeof(Id));
-  L.peak_bytes = rows_bytes + slots.memory_bytes() + static_cast<std::int64_t>(P.place.size() * 8) +
-                 static_cast<std::int64_t>((sbuf.size() + L.entries.size()) * sizeof(Entry<Id>));
-  release(nbr);
-  receive_in_place(comm, std::move(sbuf), 1, scount, sstart, seg, L, L.entries.data());
-  L.vals.resize(L.entries.size() * static_cast<std::size_t>(width));
-  std::vector<double> svals(static_cast<std::size_t>(leaving) * static_cast<std::size_t>(width));
-  pack_values(dir, R, P, own_first, sstart, L, svals.data());
-  L.peak_bytes = std::max<std::int64_t>(
-      L.peak_bytes, R.memory_bytes() + static_cast<std::int64_t>(P.place.size() * 8 + svals.size() * 8 +
-                                                                 L.vals.size() * 8 +
-                                                                 L.entries.size() * sizeof(Entry<Id>)));
-  R = BlockRows();
-  if (width > 0) receive_in_place(comm, std::move(svals), width, scount, sstart, seg, L, L.vals.data());
+  std::vector<Entry<Id>> sbuf(static_cast<std::size_t>(rd.largest(P.ents_to, rank)));
+  std::vector<std::int64_t> p(P.first.begin(), P.first.end() - 1);
+  cut = pack_part(P, R, nbr, slots, rank, 0, P.ents_to[rank], p[rank], L.entries.data() + L.cnt[seg[rank]]);
+  MPI_Datatype rec;
+  MPI_Type_contiguous(static_cast<int>(sizeof(Entry<Id>)), MPI_BYTE, &rec);
+  MPI_Type_commit(&rec);
+  RoundCounts n(size);
+  for (int c = 0; c < rd.count; ++c) {
+    for (int r = 0, s = 0; r < size; ++r) {
+      n.scount[r] = r == rank ? 0 : static_cast<int>(rd.piece(P.ents_to[r], c));
+      n.sdisp[r] = s;
+      s += n.scount[r];
+      n.rcount[r] = r == rank ? 0 : static_cast<int>(rd.piece(L.cnt[seg[r + 1]] - L.cnt[seg[r]], c));
+      n.rdisp[r] = n.rcount[r] > 0 ? static_cast<int>(L.cnt[seg[r]] + c * rd.per_owner) : 0;
+      if (r != rank)
+        cut += pack_part(P, R, nbr, slots, r, c * rd.per_owner, c * rd.per_owner + n.scount[r], p[r],
+                         sbuf.data() + n.sdisp[r]);
+    }
+    MPI_Alltoallv(sbuf.data(), n.scount.data(), n.sdisp.data(), rec, L.entries.data(), n.rcount.data(),
+                  n.rdisp.data(), rec, comm);
+  }
+  MPI_Type_free(&rec);
+  L.peak_bytes = R.memory_bytes() + static_cast<std::int64_t>(nbr.capacity() * sizeof(Id)) + slots.memory_bytes() +
+                 static_cast<std::int64_t>(P.row.size() * 12 + (sbuf.size() + L.entries.size()) * sizeof(Entry<Id>) +
+                                           (L.cnt.size() + L.owned.size()) * 8 + L.by_gid.size() * 4);
+  release(sbuf);
   clock.done("exchange");
   L.boundary.assign(L.owned.size(), 0);
   for (std::size_t v = 0; v < L.owned.size(); ++v)
@@ -589,14 +624,88 @@ OwnedLists<Id> rows_to_owners(MPI_Comm comm, const OwnerDirectory& dir, BlockRow
   return L;
 }
 
+// Step 6: the rows' values (`width` per entry) to the owners, straight into
+// the CSR's edge values (`values`, laid out: fill_csr): in the same rounds
+// and pack order as the entries, each received piece copied to its rows'
+// places (row i of the lists is local row owned_to_local[i], in the same
+// neighbour order). Where the values waited in the lists beside their
+// entries (8 bytes per entry), the CSR was filled from them.
+void values_to_csr(MPI_Comm comm, const RowPlan& P, const Rounds& rd, const BlockRows& R,
+                   const std::vector<std::int64_t>& cnt, const std::vector<std::int64_t>& seg,
+                   const std::vector<LocalId>& owned_to_local, const std::vector<std::int64_t>& offsets,
+                   std::vector<double>& values, std::int64_t& peak) {
+  const int size = comm_size(comm), rank = comm_rank(comm), width = R.width;
+  values.resize(static_cast<std::size_t>(cnt.back()) * static_cast<std::size_t>(width));
+  if (width == 0) return;
+  const auto w = static_cast<std::size_t>(width);
+  // Row i of the lists at its place in the CSR; its offsets are read at
+  // random, so they and the place are fetched ahead.
+  constexpr std::int64_t kOffsetsAhead = 16, kPlaceAhead = 8;
+  const auto n_owned = static_cast<std::int64_t>(owned_to_local.size());
+  auto place = [&](std::int64_t i) {
+    if (i + kOffsetsAhead < n_owned) __builtin_prefetch(&offsets[owned_to_local[i + kOffsetsAhead]]);
+    if (i + kPlaceAhead < n_owned)
+      __builtin_prefetch(values.data() + offsets[owned_to_local[i + kPlaceAhead]] * width, 1);
+    return values.data() + offsets[owned_to_local[i]] * width;
+  };
+  auto values_at = [&](std::int64_t t) { return R.values.data() + R.offsets[t] * width; };
+  const std::int64_t own_end = P.first[rank + 1];
+  for (std::int64_t p = P.first[rank], i = seg[rank]; p < own_end; ++p, ++i) {  // this rank's own rows
+    if (p + kOffsetsAhead < own_end) __builtin_prefetch(&R.offsets[P.row[static_cast<std::size_t>(p + kOffsetsAhead)]]);
+    if (p + kPlaceAhead < own_end) __builtin_prefetch(values_at(P.row[static_cast<std::size_t>(p + kPlaceAhead)]));
+    const std::int64_t t = P.row[static_cast<std::size_t>(p)];
+    std::copy(values_at(t), values_at(t + 1), place(i));
+  }
+  std::vector<std::int64_t> from(static_cast<std::size_t>(size));  // entries from each sender
+  for (int r = 0; r < size; ++r) from[r] = cnt[seg[r + 1]] - cnt[seg[r]];
+  std::vector<double> sv(static_cast<std::size_t>(rd.largest(P.ents_to, rank)) * w),
+      rv(static_cast<std::size_t>(rd.largest(from, rank)) * w);
+  peak = std::max<std::int64_t>(peak, R.memory_bytes() + static_cast<std::int64_t>(
+                                          P.row.size() * 12 + (sv.size() + rv.size()) * 8 +
+                                          owned_to_local.size() * 4 + cnt.size() * 8));
+  std::vector<std::int64_t> p(P.first.begin(), P.first.end() - 1), at(seg.begin(), seg.end() - 1);
+  RoundCounts n(size);
+  for (int c = 0; c < rd.count; ++c) {
+    for (int r = 0, s = 0, q = 0; r < size; ++r) {
+      const std::int64_t k0 = c * rd.per_owner, sent = r == rank ? 0 : rd.piece(P.ents_to[r], c);
+      n.scount[r] = static_cast<int>(sent * width);
+      n.sdisp[r] = s;
+      n.rcount[r] = r == rank ? 0 : static_cast<int>(rd.piece(from[r], c) * width);
+      n.rdisp[r] = q;
+      double* dst = sv.data() + s;
+      for_each_piece(P, R, k0, k0 + sent, p[r], values_at, [&](std::int64_t t, std::int64_t j0, std::int64_t j1) {
+        dst = std::copy(R.values.data() + (R.offsets[t] + j0) * width, R.values.data() + (R.offsets[t] + j1) * width,
+                        dst);
+      });
+      s += n.scount[r];
+      q += n.rcount[r];
+    }
+    MPI_Alltoallv(sv.data(), n.scount.data(), n.sdisp.data(), MPI_DOUBLE, rv.data(), n.rcount.data(),
+                  n.rdisp.data(), MPI_DOUBLE, comm);
+    for (int r = 0; r < size; ++r) {  // sender r's piece: its entries k .. end of the lists, row by row
+      std::int64_t k = cnt[seg[r]] + c * rd.per_owner;
+      const std::int64_t end = k + n.rcount[r] / width;
+      const double* src = rv.data() + n.rdisp[r];
+      for (std::int64_t& i = at[r]; k < end;) {
+        const std::int64_t e = std::min(end, cnt[i + 1]);
+        std::copy(src, src + (e - k) * width, place(i) + (k - cnt[i]) * width);
+        src += (e - k) * width;
+        k = e;
+        if (k == cnt[i + 1]) ++i;
+      }
+    }
+  }
+}
+
 // RCM order of the two groups of owned indices (group[0] interior, group[1]
 // boundary), each then sorted by degree within windows.
 template <class Id>
-void rcm_groups(const OwnedLists<Id>& L, std::vector<std::int64_t> (&group)[2]) {
+void rcm_groups(const OwnedLists<Id>& L, std::vector<std::int64_t> (&group)[2], std::vector<std::int32_t>& spare) {
   // Owned-index adjacency (-1 for ghosts) and group positions for the BFS.
   auto nbr = [&L](std::int64_t k) -> std::int64_t { return L.nbr_owner(k) == L.rank ? L.nbr_index(k) : -1; };
   std::vector<std::int32_t> pos(L.owned.size(), -1);  // 32-bit: n_owned < 2^31 (receive_headers)
   std::vector<std::int64_t> seeds, ties;
+  ties.reserve(L.owned.size());  // (grown by doubling, its blocks split the heap's free blocks; also below)
   for (int gi : {1, 0}) {  // the boundary first: its order seeds the interior's
     auto& grp = group[gi];
     for (std::size_t t = 0; t < grp.size(); ++t) pos[grp[t]] = static_cast<std::int32_t>(t);
@@ -607,7 +716,7 @@ void rcm_groups(const OwnedLists<Id>& L, std::vector<std::int64_t> (&group)[2]) 
       for (auto b : group[1])
         for (auto k = L.cnt[b]; k < L.cnt[b + 1]; ++k)
           if (const std::int64_t u = nbr(k); u >= 0 && !L.boundary[u]) seeds.push_back(pos[u]);
-    grp = rcm_order(grp, L.cnt, nbr, pos, seeds, ties);
+    grp = rcm_order(grp, L.cnt, nbr, pos, seeds, ties, spare);
     for (auto v : grp) pos[v] = -1;
     sort_degree_windows(grp, L.cnt);
   }
@@ -615,18 +724,25 @@ void rcm_groups(const OwnedLists<Id>& L, std::vector<std::int64_t> (&group)[2]) 
 
 // Step 3: owned indices in local order: interior, then boundary, each group
 // in RCM (from owner-side index order: the bfs partition's bands keep its
-// scans near in memory) or global id order. Sets n_interior.
+// scans near in memory) or global id order. Sets n_interior. `spare`: a
+// buffer for RCM's group adjacency (rcm_order).
 template <class Id>
-std::vector<std::int64_t> local_order(const OwnedLists<Id>& L, LocalOrdering ordering, LocalId& n_interior) {
+std::vector<std::int64_t> local_order(const OwnedLists<Id>& L, LocalOrdering ordering, LocalId& n_interior,
+                                      std::vector<std::int32_t>& spare) {
   std::vector<std::int64_t> group[2];
   const bool rcm = ordering == LocalOrdering::kRcm;
+  const auto n_boundary = static_cast<std::size_t>(std::count(L.boundary.begin(), L.boundary.end(), 1));
+  group[0].reserve(L.owned.size() - n_boundary);
+  group[1].reserve(n_boundary);
   for (std::size_t t = 0; t < L.owned.size(); ++t) {
     const std::int64_t v = rcm ? static_cast<std::int64_t>(t) : L.by_gid[t];
     group[L.boundary[v] ? 1 : 0].push_back(v);
   }
-  if (rcm) rcm_groups(L, group);
-  std::vector<std::int64_t> order = std::move(group[0]);
-  n_interior = static_cast<LocalId>(order.size());
+  if (rcm) rcm_groups(L, group, spare);
+  n_interior = static_cast<LocalId>(group[0].size());
+  std::vector<std::int64_t> order;
+  order.reserve(L.owned.size());
+  order.insert(order.end(), group[0].begin(), group[0].end());
   order.insert(order.end(), group[1].begin(), group[1].end());
   return order;
 }
@@ -685,16 +801,14 @@ LocalIds number_nodes(const OwnedLists<Id>& L, const std::vector<std::int64_t>& 
   return ids;
 }
 
-// Step 5: the CSR in local order, neighbours in global-id order, with the
-// edges' values.
+// Step 5: the CSR in local order, neighbours in global-id order (the edges'
+// values follow: values_to_csr).
 template <class Id>
-void fill_csr(const OwnedLists<Id>& L, const std::vector<std::int64_t>& order, const LocalIds& ids,
-              int rank, int width,
-              std::vector<std::int64_t>& offsets, std::vector<LocalId>& adjacency, std::vector<double>& values) {
+void fill_csr(const OwnedLists<Id>& L, const std::vector<std::int64_t>& order, const LocalIds& ids, int rank,
+              std::vector<std::int64_t>& offsets, std::vector<LocalId>& adjacency) {
   const std::size_t n = order.size();
   offsets.assign(n + 1, 0);
   adjacency.resize(L.entries.size());
-  values.resize(L.entries.size() * width);
   for (std::size_t l = 0; l < n; ++l) {
     if (l + 16 < n) __builtin_prefetch(&L.cnt[order[l + 16]]);
     offsets[l + 1] = offsets[l] + (L.cnt[order[l] + 1] - L.cnt[order[l]]);
@@ -706,22 +820,14 @@ void fill_csr(const OwnedLists<Id>& L, const std::vector<std::int64_t>& order, c
   constexpr std::size_t kAhead = 16, kDestAhead = 8, kIdsAhead = 4;
   for (std::size_t v = 0; v < n; ++v) {
     if (v + kAhead < n) __builtin_prefetch(&offsets[ids.owned_to_local[v + kAhead]]);
-    if (v + kDestAhead < n) {  // the block's first lines, for writing: the stores otherwise stall on their misses
-      const std::int64_t p = offsets[ids.owned_to_local[v + kDestAhead]];
-      __builtin_prefetch(adjacency.data() + p, 1);
-      if (width > 0) {  // (no values: data() may be null, and no offset may be added to it)
-        __builtin_prefetch(values.data() + p * width, 1);
-        __builtin_prefetch(values.data() + p * width + 8, 1);
-      }
-    }
+    if (v + kDestAhead < n)  // the block's first line, for writing: the stores otherwise stall on their misses
+      __builtin_prefetch(adjacency.data() + offsets[ids.owned_to_local[v + kDestAhead]], 1);
     if (v + kIdsAhead < n)  // the neighbours' local ids, read at random
       for (auto k = L.cnt[v + kIdsAhead]; k < L.cnt[v + kIdsAhead + 1]; ++k)
         if (L.nbr_owner(k) == rank) __builtin_prefetch(&ids.owned_to_local[L.nbr_index(k)]);
     std::int64_t pos = offsets[ids.owned_to_local[v]];
-    for (auto k = L.cnt[v]; k < L.cnt[v + 1]; ++k, ++pos) {
+    for (auto k = L.cnt[v]; k < L.cnt[v + 1]; ++k, ++pos)
       adjacency[pos] = L.nbr_owner(k) == rank ? ids.owned_to_local[L.nbr_index(k)] : ids.ghost(L.entries[k].nbr);
-      copy_values(L.vals.data() + k * width, values.data() + pos * width, width);
-    }
   }
 }
 
@@ -798,28 +904,50 @@ template <class Id>
 void DistGraph::build(const OwnerDirectory& owners, BlockRows&& rows, std::vector<Id>& nbr, int halo_width,
                       LocalOrdering ordering) {
   const MPI_Comm gc = comm_.get();  // the graph's own duplicate (halo traffic apart from the caller's)
-  const int rank = comm_rank(gc), width = width_;
+  const int rank = comm_rank(gc);
   PhaseClock clock(build_phases_);
   GlobalId cut = 0;
-  std::vector<Id> ids = std::move(nbr);  // (rows is reset by rows_to_owners)
-  const OwnedLists<Id> lists = rows_to_owners(gc, owners, std::move(rows), ids, cut, clock);
+  std::vector<Id> ids = std::move(nbr);
+  RowPlan plan;
+  std::vector<std::int64_t> seg;
+  Rounds rounds;
+  OwnedLists<Id> lists = rows_to_owners(gc, owners, rows, ids, plan, seg, rounds, cut, clock);
   long long c = static_cast<long long>(cut), gcut = 0;
   MPI_Allreduce(&c, &gcut, 1, MPI_LONG_LONG, MPI_SUM, gc);
   edge_cut_ = gcut / 2;  // each cut edge is in the rows of both its ends
   clock.done("lists");
-  const std::vector<std::int64_t> order = local_order(lists, ordering, n_interior_);
+  // The rows' ids, read no more, hold RCM's group adjacency and then the
+  // CSR's (4 bytes per entry, as 32-bit ids): freed, their block was taken
+  // apart by smaller ones, and each adjacency took fresh pages (126 MiB at
+  // 10M on 2 ranks). The CSR keeps the block where it is at most 1/8 larger.
+  std::vector<std::int32_t> spare;
+  if constexpr (std::is_same_v<Id, std::int32_t>) spare = std::move(ids);
+  release(ids);
+  const std::vector<std::int64_t> order = local_order(lists, ordering, n_interior_, spare);
   clock.done("order");
   n_owned_ = static_cast<LocalId>(lists.owned.size());
   const std::vector<Ghost> ghosts = ghost_nodes(lists, rank);
-  const LocalIds lids = number_nodes(lists, order, ghosts, local_to_global_, owned_sorted_);
-  fill_csr(lists, order, lids, rank, width, offsets_, adjacency_, edge_values_);
+  LocalIds lids = number_nodes(lists, order, ghosts, local_to_global_, owned_sorted_);
+  const std::size_t n_entries = lists.entries.size();
+  if (spare.capacity() >= n_entries && spare.capacity() - n_entries <= n_entries / 8) adjacency_ = std::move(spare);
+  release(spare);
+  fill_csr(lists, order, lids, rank, offsets_, adjacency_);
   clock.done("csr");
-  // The build's temporaries at their largest (rows, lists, ghosts).
-  build_peak_bytes_ = std::max<std::int64_t>(lists.peak_bytes, static_cast<std::int64_t>(
-      lists.entries.capacity() * sizeof(Entry<Id>) + lists.vals.capacity() * sizeof(double) +
+  // The build's temporaries at their largest: the rows and lists while the
+  // entries are sent (rows_to_owners); the lists beside the rows' values and
+  // the ids' block (RCM's, then the CSR's adjacency); the values' rounds
+  // (values_to_csr).
+  build_peak_bytes_ = std::max<std::int64_t>(lists.peak_bytes, rows.memory_bytes() + static_cast<std::int64_t>(
+      lists.entries.capacity() * sizeof(Entry<Id>) + plan.row.capacity() * 12 + adjacency_.capacity() * 4 +
       (lists.cnt.capacity() + lists.owned.capacity()) * 8 + lists.by_gid.capacity() * 4 +
       ghosts.capacity() * sizeof(Ghost) + lids.ghost_sorted.capacity() * sizeof(lids.ghost_sorted[0]) +
       lids.owned_to_local.capacity() * sizeof(LocalId) + order.capacity() * 8));
+  release(lists.entries);
+  release(lids.ghost_sorted);
+  values_to_csr(gc, plan, rounds, rows, lists.cnt, seg, lids.owned_to_local, offsets_, edge_values_,
+                build_peak_bytes_);
+  rows = BlockRows();
+  clock.done("values");
   halo_ = make_halo(gc, ghosts, lists, lids, halo_width);
   clock.done("halo");
 }

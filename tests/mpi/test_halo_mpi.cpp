@@ -168,6 +168,42 @@ TEST(DistGraph, NeighbourSlotsSentWholeOrAskedGiveTheSameGraph) {
   }
 }
 
+// The entries and the values leave for their owners in rounds of at most
+// SNL_SETUP_ROUND_BYTES per rank (dist_graph.cpp, Rounds; 64 MiB unless
+// set); any round size, set on one rank or all, with the slots sent whole or
+// asked (asked slots are answered in the order the rounds read them), gives
+// the same graph and values.
+TEST(DistGraph, RowsSentInRoundsGiveTheSameGraph) {
+  Network w = make_network({.n = 700, .dim = 2, .radius = 0.08});
+  for (std::size_t e = 0; e < w.sensor_ranges.size(); ++e) w.sensor_sigmas.push_back(0.01 + 0.001 * double(e % 7));
+  auto build = [&](const char* bytes, bool only_rank0, const char* slots) {
+    if (bytes && (!only_rank0 || world_rank() == 0)) setenv("SNL_SETUP_ROUND_BYTES", bytes, 1);
+    if (slots) setenv("SNL_SETUP_SLOTS", slots, 1);
+    LocalizationProblem p(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kBfs, nullptr);
+    unsetenv("SNL_SETUP_ROUND_BYTES");
+    unsetenv("SNL_SETUP_SLOTS");
+    return p;
+  };
+  const LocalizationProblem base = build(nullptr, false, nullptr);
+  const DistGraph& a = base.graph();
+  if (world_size() > 1) EXPECT_GT(a.num_ghosts(), 0) << "no ghosts: nothing is sent in rounds";
+  ASSERT_EQ(a.edge_values().size(), std::size_t(a.offsets().back()));
+  for (const char* bytes : {"1", "40", "1000"})
+    for (const bool only0 : {false, true})
+      for (const char* slots : {static_cast<const char*>(nullptr), "ask"}) {
+        const LocalizationProblem other = build(bytes, only0, slots);
+        const DistGraph& b = other.graph();
+        const std::string how = std::string(bytes) + (only0 ? " on rank 0" : "") + (slots ? " asked" : "");
+        EXPECT_EQ(a.local_to_global(), b.local_to_global()) << how << " rank " << world_rank();
+        EXPECT_EQ(a.offsets(), b.offsets()) << how;
+        EXPECT_EQ(a.adjacency(), b.adjacency()) << how;
+        EXPECT_EQ(a.edge_values(), b.edge_values()) << how;
+        EXPECT_EQ(base.sensor_sigmas(), other.sensor_sigmas()) << how;
+        EXPECT_EQ(a.num_interior(), b.num_interior()) << how;
+        EXPECT_EQ(a.edge_cut(), b.edge_cut()) << how;
+      }
+}
+
 // Duplicate measurements (either orientation, on any rank) merge in the
 // rows of both ends (BlockRows::from_pairs) into exactly the serial merge's
 // range and sigma (merge_duplicates): each owned node's edge to a neighbour
