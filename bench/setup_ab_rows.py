@@ -5,7 +5,8 @@ graph build s, edge cut, ghosts, ms per relaxation and MM iteration, peak RSS of
 the largest rank (MiB), positions equal to the first A run's. With --phases:
 n, ranks, build, rep, setup s, merge, partition (its graph + the call), the
 graph build's edge exchange, lists, order and CSR, peak RSS, positions, then
-the block rows and the neighbour slots (0.00 for a build without them).
+the block rows, the neighbour slots and the values' rounds (0.00 for a build
+without them).
     /usr/bin/python3 bench/setup_ab_rows.py [--phases] W/records.jsonl ..."""
 import json
 import sys
@@ -23,7 +24,8 @@ for f in sys.argv[1 + phases:]:
                   f"{r['setup_merge_seconds']:.2f} | {r['setup_partition_seconds']:.2f} ({g:.2f} + {call:.2f}) | "
                   + " | ".join(f"{x:.2f}" for x in ph) + f" | {max(r['peak_rss_bytes_per_rank']) / 2**20:.0f} | "
                   f"{'yes' if r['positions_equal_first_A'] else 'NO'} | "
-                  f"{r.get('setup_rows_seconds', 0):.2f} | {r.get('setup_graph.slots_seconds', 0):.2f} |")
+                  f"{r.get('setup_rows_seconds', 0):.2f} | {r.get('setup_graph.slots_seconds', 0):.2f} | "
+                  f"{r.get('setup_graph.values_seconds', 0):.2f} |")
             continue
         call = r.get("setup_partition.metis_seconds", r.get("setup_partition.bfs_seconds", 0))
         g = r.get("setup_partition.metis_graph_seconds", r.get("setup_partition.bfs_graph_seconds", 0))

@@ -9,7 +9,8 @@ import sys
 
 COLS = [("merge", "merge"), ("rows", "rows"), ("partition.bfs_graph", "partition's graph"),
         ("partition.bfs", "bfs passes"), ("graph.slots", "slots"), ("graph.exchange", "exchange"),
-        ("graph.lists", "lists"), ("graph.order", "order"), ("graph.csr", "csr"), ("anchors", "anchors"),
+        ("graph.lists", "lists"), ("graph.order", "order"), ("graph.csr", "csr"), ("graph.values", "values"),
+        ("anchors", "anchors"),
         ("connectivity", "connectivity")]
 
 

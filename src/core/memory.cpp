@@ -91,6 +91,12 @@ ReuseFreedMemory::~ReuseFreedMemory() {
 #endif
 }
 
+void return_free_memory() {
+#if defined(SNL_GLIBC_MALLOC)
+  malloc_trim(0);
+#endif
+}
+
 void* map_pages(std::size_t bytes) {
   if (bytes == 0) bytes = 1;  // an empty request still gets a page of its own: a unique pointer
   void* p = mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);

@@ -26,6 +26,10 @@ const char* allocator_choice_error();
 /// ("system"); for the solve's JSON.
 const char* allocator_mode();
 
+/// Returns malloc's free memory to the system (glibc: malloc_trim, which also
+/// releases the pages of free blocks inside the heap); no effect elsewhere.
+void return_free_memory();
+
 /// While alive, freed memory stays in the process for reuse instead of going
 /// back to the system (glibc: no mmap for large blocks, no trimming), so that
 /// the setup's temporaries fault their pages once; on destruction the defaults
