@@ -446,8 +446,8 @@ void receive_headers(MPI_Comm comm, RowPlan& P, OwnedLists<Id>& L, std::vector<s
 
 // The entries leaving for other owners go in rounds: round c carries entries
 // [c * per_owner, (c + 1) * per_owner) of every owner's part, so that the
-// send and receive buffers stay small (kRoundBytes per rank) beside the rows
-// and the lists (a send buffer of all leaving entries was the build's
+// send and receive buffers stay small (64 MiB of entries per rank) beside the
+// rows and the lists (a send buffer of all leaving entries was the build's
 // high-water mark). per_owner and count are the same on every rank.
 struct Rounds {
   std::int64_t per_owner = 1;
