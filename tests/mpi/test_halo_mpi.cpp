@@ -6,6 +6,7 @@
 
 #include <cstdlib>
 #include <map>
+#include <string>
 #include <utility>
 
 #include "solve_helpers.hpp"
@@ -141,6 +142,16 @@ TEST(DistGraph, ThirtyTwoAndSixtyFourBitIdsGiveTheSameGraph) {
   EXPECT_EQ(fa, fb);
 }
 
+// Two builds of one graph are the same: numbering, CSR, values, interior, cut.
+static void expect_same_graph(const DistGraph& a, const DistGraph& b, const std::string& how) {
+  EXPECT_EQ(a.local_to_global(), b.local_to_global()) << how << " rank " << world_rank();
+  EXPECT_EQ(a.offsets(), b.offsets()) << how;
+  EXPECT_EQ(a.adjacency(), b.adjacency()) << how;
+  EXPECT_EQ(a.edge_values(), b.edge_values()) << how;
+  EXPECT_EQ(a.num_interior(), b.num_interior()) << how;
+  EXPECT_EQ(a.edge_cut(), b.edge_cut()) << how;
+}
+
 // The rows' neighbours learn their directory slots either from whole blocks
 // of the directory or by asking for each id (NeighbourSlots, src/graph/
 // dist_graph.cpp); SNL_SETUP_SLOTS forces one way on the rank that sets it.
@@ -158,13 +169,7 @@ TEST(DistGraph, NeighbourSlotsSentWholeOrAskedGiveTheSameGraph) {
   if (world_size() > 1) EXPECT_GT(a.num_ghosts(), 0) << "no ghosts: the slots of other blocks are not used";
   for (const auto& [how, only0] : {std::pair{"ask", false}, {"block", false}, {"ask", true}, {"block", true}}) {
     const LocalizationProblem other = build(how, only0);
-    const DistGraph& b = other.graph();
-    EXPECT_EQ(a.local_to_global(), b.local_to_global()) << how << " rank " << world_rank();
-    EXPECT_EQ(a.offsets(), b.offsets()) << how;
-    EXPECT_EQ(a.adjacency(), b.adjacency()) << how;
-    EXPECT_EQ(a.edge_values(), b.edge_values()) << how;
-    EXPECT_EQ(a.num_interior(), b.num_interior()) << how;
-    EXPECT_EQ(a.edge_cut(), b.edge_cut()) << how;
+    expect_same_graph(a, other.graph(), how);
   }
 }
 
@@ -192,15 +197,9 @@ TEST(DistGraph, RowsSentInRoundsGiveTheSameGraph) {
     for (const bool only0 : {false, true})
       for (const char* slots : {static_cast<const char*>(nullptr), "ask"}) {
         const LocalizationProblem other = build(bytes, only0, slots);
-        const DistGraph& b = other.graph();
         const std::string how = std::string(bytes) + (only0 ? " on rank 0" : "") + (slots ? " asked" : "");
-        EXPECT_EQ(a.local_to_global(), b.local_to_global()) << how << " rank " << world_rank();
-        EXPECT_EQ(a.offsets(), b.offsets()) << how;
-        EXPECT_EQ(a.adjacency(), b.adjacency()) << how;
-        EXPECT_EQ(a.edge_values(), b.edge_values()) << how;
+        expect_same_graph(a, other.graph(), how);
         EXPECT_EQ(base.sensor_sigmas(), other.sensor_sigmas()) << how;
-        EXPECT_EQ(a.num_interior(), b.num_interior()) << how;
-        EXPECT_EQ(a.edge_cut(), b.edge_cut()) << how;
       }
 }
 
