@@ -255,7 +255,7 @@ struct OwnedLists {
   std::vector<std::int64_t> cnt;  // owned index v: entries [cnt[v], cnt[v + 1])
   std::vector<Entry<Id>> entries;  // per node sorted by neighbour global id
   std::vector<char> boundary;     // owned index v has a neighbour on another rank
-  int rank = 0, width = 0;
+  int rank = 0;
   std::int64_t peak_bytes = 0;    // the step's temporaries at their largest
   std::int32_t nbr_owner(std::int64_t k) const { return entries[k].owner; }
   std::int32_t nbr_index(std::int64_t k) const { return entries[k].index; }
@@ -579,7 +579,6 @@ OwnedLists<Id> rows_to_owners(MPI_Comm comm, const OwnerDirectory& dir, const Bl
   const int size = comm_size(comm), rank = comm_rank(comm);
   OwnedLists<Id> L;
   L.rank = rank;
-  L.width = R.width;
   P = plan_rows(dir, R, size);
   receive_headers(comm, P, L, seg);
   rd = plan_rounds(comm, P, sizeof(Entry<Id>));
