@@ -13,6 +13,10 @@ same() {  # x and every history column identical
 # Seconds per primal iteration (SNL_TEST_CONSENSUS_DELAY): Newton converges in
 # 5 iterations, so it gets longer ones; the signal lands 0.3 s after every rank
 # has its handler installed, well inside every run.
+# The snl ranks in process group $1; none yet (ps finds no process before
+# setsid has made the group, and exits 1) is an empty list, not a failure of
+# the script under pipefail.
+rank_pids() { ps -o pid=,comm= -g "$1" | awk '$2 == "snl" {print $1}' || true; }
 for case in "0.5 newton-tree --dual splitting" "0.2 subgradient --max-iter 40" "0.2 incremental --max-iter 40"; do
   read -r delay m <<< "$case"
   read -r -a ARGS <<< "--method $m -q"
@@ -25,14 +29,14 @@ for case in "0.5 newton-tree --dual splitting" "0.2 subgradient --max-iter 40" "
     # The signal goes to the ranks (as a batch system sends it), not to mpirun.
     ranks=""
     for _ in $(seq 200); do
-      ranks=$(ps -o pid=,comm= -g "$pid" | awk '$2 == "snl" {print $1}')
+      ranks=$(rank_pids "$pid")
       [ "$(echo "$ranks" | wc -w)" -eq 3 ] && break
       sleep 0.05
     done
     # shellcheck disable=SC2086  # ranks: a list of pids
     wait_caught "$sig" $ranks || fail "$m: the ranks did not install their SIG$sig handler"
     sleep 0.3
-    ranks=$(ps -o pid=,comm= -g "$pid" | awk '$2 == "snl" {print $1}')
+    ranks=$(rank_pids "$pid")
     [ -n "$ranks" ] || fail "$m: the run ended before the signal"
     kill -s "$sig" $ranks
     rc=0
