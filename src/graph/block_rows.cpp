@@ -29,6 +29,25 @@ inline void copy_row_values(const double* src, double* dst, int width) {
   for (int c = 0; c < width; ++c) dst[c] = src[c];
 }
 
+// The values per row entry: fixed at compile time for the usual 0, 1 and 2
+// (the packing loop over every half-edge then copies them without a loop or
+// a multiplication; docs/performance.md), read at run time otherwise (W = -1).
+template <int W>
+struct Width {
+  int n;
+  constexpr int get() const { return W >= 0 ? W : n; }
+};
+
+template <class F>
+void with_width(int width, F&& f) {
+  switch (width) {
+    case 0: f(Width<0>{0}); break;
+    case 1: f(Width<1>{1}); break;
+    case 2: f(Width<2>{2}); break;
+    default: f(Width<-1>{width});
+  }
+}
+
 // The halves bound for one block arrive grouped by bucket of consecutive
 // rows (few write streams when the rows are filled; a bucket's rows fit in
 // cache): 1024 buckets at most, 2^shift rows each.
@@ -102,24 +121,27 @@ void route_halves(MPI_Comm comm, const detail::Blocks& blocks, const GlobalId* e
   H.keep_vals.resize(static_cast<std::size_t>(n_keep) * w);
   std::vector<Half<Id>> sbuf(static_cast<std::size_t>(start[size]));
   std::vector<double> svals(sbuf.size() * w), v(std::max<std::size_t>(w, 1));
-  auto put = [&](GlobalId a, GlobalId b) {
-    int r;
-    std::int32_t off;
-    const auto p = static_cast<std::size_t>(at[slot(a, r, off)]++);
-    const Half<Id> h{off, static_cast<Id>(b)};
-    if (r == rank) {
-      copy_row_values(v.data(), H.keep_vals.data() + p * w, width);
-      H.keep[p] = h;
-    } else {
-      copy_row_values(v.data(), svals.data() + p * w, width);
-      sbuf[p] = h;
+  with_width(width, [&](auto wd) {
+    const auto ws = static_cast<std::size_t>(wd.get());
+    auto put = [&](GlobalId a, GlobalId b) {
+      int r;
+      std::int32_t off;
+      const auto p = static_cast<std::size_t>(at[slot(a, r, off)]++);
+      const Half<Id> h{off, static_cast<Id>(b)};
+      if (r == rank) {
+        copy_row_values(v.data(), H.keep_vals.data() + p * ws, wd.get());
+        H.keep[p] = h;
+      } else {
+        copy_row_values(v.data(), svals.data() + p * ws, wd.get());
+        sbuf[p] = h;
+      }
+    };
+    for (std::size_t e = 0; e < ne; ++e) {
+      vals(e, v.data());
+      put(ends[2 * e], ends[2 * e + 1]);
+      put(ends[2 * e + 1], ends[2 * e]);
     }
-  };
-  for (std::size_t e = 0; e < ne; ++e) {
-    vals(e, v.data());
-    put(ends[2 * e], ends[2 * e + 1]);
-    put(ends[2 * e + 1], ends[2 * e]);
-  }
+  });
   if (packed) packed();
   // Each sender's bucket counts for this rank's block, then the halves.
   const std::int64_t nk = kfirst[rank + 1] - kfirst[rank];

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <mpi.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <map>
 #include <string>
@@ -89,6 +90,39 @@ static void check_edges_held_by_one_rank() {
       const GlobalId lo = std::min(gv, w[t].first), hi = std::max(gv, w[t].first);
       EXPECT_EQ(g.edge_values()[2 * k + 1], -static_cast<double>(lo * 3 + hi));
     }
+  }
+}
+
+// Edge values of 0 to 4 per edge (the block rows copy widths 0, 1 and 2 by
+// fixed-width code, others by a loop): each entry of an owned row holds its
+// pair's values, whichever rank gave the pair and in which orientation.
+TEST(DistGraph, EdgeValuesOfAnyWidthReachBothEnds) {
+  constexpr GlobalId n = 97;
+  const int rank = world_rank(), size = world_size();
+  auto value = [](GlobalId a, GlobalId b, int c) { return double(std::min(a, b) * 1000 + std::max(a, b)) + 0.25 * c; };
+  std::vector<int> owner(n);
+  for (GlobalId g = 0; g < n; ++g) owner[g] = int((g * 7) % size);
+  for (int width = 0; width <= 4; ++width) {
+    std::vector<GlobalId> edges;
+    std::vector<double> values;
+    for (GlobalId a = 0; a < n; ++a)
+      for (GlobalId d : {1, 5, 31}) {
+        const GlobalId b = (a + d) % n;
+        if (int((a + b) % size) != rank) continue;  // each pair from one rank, some written high end first
+        edges.insert(edges.end(), {d == 5 ? b : a, d == 5 ? a : b});
+        for (int c = 0; c < width; ++c) values.push_back(value(a, b, c));
+      }
+    const DistGraph g(MPI_COMM_WORLD, n, owner, edges, values, width, 2);
+    ASSERT_EQ(g.edge_width(), width);
+    std::int64_t checked = 0;
+    for (LocalId v = 0; v < g.num_owned(); ++v)
+      for (auto e = g.offsets()[v]; e < g.offsets()[v + 1]; ++e, ++checked)
+        for (int c = 0; c < width; ++c)
+          ASSERT_EQ(g.edge_value(e, c), value(g.global_id(v), g.global_id(g.adjacency()[e]), c))
+              << "width " << width << ", row " << g.global_id(v) << ", value " << c;
+    long long total = checked;
+    MPI_Allreduce(MPI_IN_PLACE, &total, 1, MPI_LONG_LONG, MPI_SUM, MPI_COMM_WORLD);
+    EXPECT_EQ(total, 6 * n) << "width " << width;  // three pairs per node, in the rows of both ends
   }
 }
 
