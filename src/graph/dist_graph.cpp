@@ -296,11 +296,13 @@ class NeighbourSlots {
   }
   // The exchange: `ask[r]` holds the ids asked of block r, in pack order.
   void exchange(MPI_Comm comm, std::vector<std::vector<Id>>& ask);
-  // u's slot; asked ids are answered in the order they were asked.
+  // u's slot; asked ids are answered in the order they were asked. A block
+  // held whole (this rank's, or one sent whole) is read through its base
+  // (whole_), without a branch on which it is: at 10M on 2 ranks the
+  // neighbours fall in either block at random.
   const OwnerDirectory::Slot& at(GlobalId u) {
     const int r = blocks_.of(u);
-    if (r == rank_) return dir_.local(u);
-    if (dense_[r]) return got_[static_cast<std::size_t>(from_[r] + (u - blocks_.first[r]))];
+    if (const OwnerDirectory::Slot* b = whole_[r]) return b[u - blocks_.first[r]];
     return got_[static_cast<std::size_t>(from_[r] + next_[r]++)];
   }
   // Where u's slot will be read, for a prefetch (asked slots are read in
@@ -308,8 +310,8 @@ class NeighbourSlots {
   // GCC found a member function around it pure and dropped the call.
   const void* address(GlobalId u) const {
     const int r = blocks_.of(u);
-    if (r == rank_) return &dir_.local(u);
-    return got_.data() + from_[r] + (dense_[r] ? (u - blocks_.first[r]) : 0);
+    if (const OwnerDirectory::Slot* b = whole_[r]) return b + (u - blocks_.first[r]);
+    return got_.data() + from_[r];
   }
   std::int64_t memory_bytes() const { return static_cast<std::int64_t>(got_.capacity() * sizeof(got_[0])); }
 
@@ -320,6 +322,7 @@ class NeighbourSlots {
   std::vector<std::int64_t> refs_, from_, next_;
   std::vector<char> dense_;
   std::vector<OwnerDirectory::Slot> got_;
+  std::vector<const OwnerDirectory::Slot*> whole_;  // per block: its first node's slot where held whole, else null
 };
 
 template <class Id>
@@ -362,6 +365,10 @@ void NeighbourSlots<Id>::exchange(MPI_Comm comm, std::vector<std::vector<Id>>& a
   from_.assign(static_cast<std::size_t>(size), 0);
   next_.assign(static_cast<std::size_t>(size), 0);
   for (int r = 1; r < size; ++r) from_[r] = from_[r - 1] + rcount[r - 1];
+  whole_.assign(static_cast<std::size_t>(size), nullptr);
+  for (int r = 0; r < size; ++r)
+    if (r == rank_ && nb > 0) whole_[r] = &dir_.local(blocks_.first[r]);
+    else if (dense_[r] && rcount[r] > 0) whole_[r] = got_.data() + from_[r];
 }
 
 // A row's header on its way to its owner: the node, its degree and, in a
