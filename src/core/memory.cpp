@@ -87,8 +87,8 @@ ReuseFreedMemory::~ReuseFreedMemory() {
   // not re-enabled, so blocks of 128 KiB and more are mapped from here on.
   mallopt(M_MMAP_MAX, 65536);
   mallopt(M_TRIM_THRESHOLD, 128 * 1024);
-  malloc_trim(0);
 #endif
+  if (active_) return_free_memory();
 }
 
 void return_free_memory() {
