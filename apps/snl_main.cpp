@@ -119,7 +119,7 @@ void add_solve(CLI::App& app, Commands& c) {
   s->add_option("--history-every", c.solve.solver.history_every, "record history every K iterations (0: auto)")
       ->capture_default_str();
   s->add_option("--test-every", c.solve.solver.test_every,
-                "--stop gradient: test every K iterations (0: auto, 10; above 100,000 sensors 50, growing as the square root of the iterations done)")
+                "--stop gradient: test every K iterations (0: auto, 10; from 10,000 sensors 50, growing as the square root of the iterations done)")
       ->capture_default_str();
   s->add_option("--bb-rounds", c.solve.solver.bb_rounds,
                 "consensus rounds per BB iteration (" + honoured_by(&Info::consensus_rounds) + ")")

@@ -325,9 +325,13 @@ void Solver::Run::start_phase(Phase& ph) {
   }
 }
 
-// Above 100,000 sensors: the automatic record interval (at least) and the
-// automatic gradient-test interval at the start of a phase (docs/performance.md,
-// "Bookkeeping outside the iterations").
+// From this many sensors the automatic record and test intervals follow the
+// cost of a record and of a gradient test (several iterations each), so that
+// bookkeeping stays a small share of the iterations' time; below it a run takes
+// milliseconds and records every iteration (docs/performance.md, "Bookkeeping").
+constexpr std::int64_t kLargeNetwork = 10000;
+// On large networks: the automatic record interval (at least) and the
+// automatic gradient-test interval at the start of a phase.
 constexpr std::int64_t kLargeRecordEvery = 100;
 constexpr std::int64_t kLargeTestEvery = 50;
 
@@ -349,7 +353,7 @@ void Solver::Run::set_pass_sizes(Phase& ph) const {
   // long ones; at least every 10 iterations on large networks, where a record
   // and the gradient test cost several iterations (gradient_test_cost).
   std::int64_t every = opt_.history_every;
-  const bool large = prob_.num_sensors() > 100000;
+  const bool large = prob_.num_sensors() >= kLargeNetwork;
   if (every <= 0) {
     every = opt_.max_iter <= 2000 ? 1 : (opt_.max_iter + 999) / 1000;
     if (large) every = std::max<std::int64_t>(every, 10);

@@ -46,7 +46,7 @@ struct SolverOptions {
   ///             MM, mm-accel and BB, f_hat for the others): the gradient against
   ///             the norm it would have if its edge terms did not cancel
   ///             (docs/quality.md, "Stopping rule"), tested every
-  ///             test_every iterations (0: automatic; above 100,000 sensors
+  ///             test_every iterations (0: automatic; from 10,000 sensors
   ///             an interval that grows with the iterations done).
   std::string stop = "gradient";
   /// The refinement the pipeline runs after the relaxation: mm | mm-accel, or
@@ -66,11 +66,11 @@ struct SolverOptions {
   double grad_tol = 0.0;
   /// Record history (and report progress) every this many iterations; 0: auto
   /// (every iteration up to 2000, else about 1000 records per phase; above
-  /// 100,000 sensors at least every 100 iterations, at gradient tests).
+  /// 10,000 sensors at least every 100 iterations, at gradient tests).
   std::int64_t history_every = 0;
   /// Iterations between the gradient rule's tests (each an extra exchange and
   /// a pass over the edges, about three iterations' time), rounded up to a
-  /// multiple of the record interval; 0: auto, 10, or 50 above 100,000
+  /// multiple of the record interval; 0: auto, 10, or 50 from 10,000
   /// sensors (docs/performance.md, "Bookkeeping outside the iterations").
   std::int64_t test_every = 0;
   /// Consensus rounds per BB iteration (Calafiore et al. use 20).
