@@ -69,10 +69,10 @@ LocalizationProblem& problem(bool rcm) {
       opt.localizable = GenerateOptions::Localizable::kNo;
       return generate_network(opt);
     }();
-    setenv("SNL_LOCAL_ORDER", rcm ? "rcm" : "gid", 1);
+    setenv("SNL_TEST_LOCAL_ORDER", rcm ? "rcm" : "gid", 1);
     slot = std::make_unique<LocalizationProblem>(MPI_COMM_WORLD, network_slab(whole, MPI_COMM_WORLD),
                                                  PartitionMethod::kMetis, nullptr);
-    unsetenv("SNL_LOCAL_ORDER");
+    unsetenv("SNL_TEST_LOCAL_ORDER");
   }
   return *slot;
 }

@@ -24,8 +24,8 @@ Bandwidth yardstick: bytes actually moved per second by the STREAM triad,
 which bench/stream_triad.cpp measures with non-temporal stores at 24 bytes
 per element (records with "stream_def": "nt_24B"). Older records hold the
 plain-store triad counted at 24 bytes, which moved 32 (write-allocate): their
-readings are restated x 32/24 here, as in tools/restate_ratios.py and
-docs/performance.md "The bandwidth yardstick"; the GB/s column shows the
+readings are restated x 32/24 here (docs/performance.md "Machine and
+yardstick"); the GB/s column shows the
 readings as used.
 """
 import json

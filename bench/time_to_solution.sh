@@ -12,8 +12,8 @@
 #   mm        plain MM (000) from the random start, the default stopping rule.
 # (Ceres LM from the same relaxation output: bench/ceres/compare.sh, docs/ceres.md.)
 # Columns: wall, read, setup, iterate and write seconds (the solve's JSON),
-# iterations, halo exchanges (MPI bytes over the bytes of one exchange: every
-# exchange, the stopping tests' and records' included), messages per sensor,
+# iterations, the iterations' halo exchanges (the algorithm's MPI bytes over the
+# bytes of one exchange), gradient tests (one more exchange each), messages per sensor,
 # final ML cost, RMSE, and RMSE over the CRLB on the localizable sensors
 # (`snl eval --crlb`, once per network; CRLB=0 skips it).
 # Duration: about 1 minute at 10^5 sensors, 10-15 minutes at 10^6 (the
@@ -57,14 +57,14 @@ for n in $SIZES; do
 import json, sys, os
 work, n, crlb, methods = sys.argv[1], sys.argv[2], float(sys.argv[3]), sys.argv[4].split()
 print(f"\nn = {n}: RMSE_CRLB over the localizable sensors = {crlb:.6g}")
-print(f"{'method':8} {'wall':>8} {'read':>6} {'setup':>6} {'iterate':>8} {'write':>6} {'iters':>7} {'exchanges':>9} "
+print(f"{'method':8} {'wall':>8} {'read':>6} {'setup':>6} {'iterate':>8} {'write':>6} {'iters':>7} {'exchanges':>9} {'tests':>5} "
       f"{'msg/sensor':>10} {'ml_cost':>16} {'rmse':>9} {'rmse/crlb':>9}")
 for m in methods:
     d = json.load(open(os.path.join(work, f"r_{n}_{m}.json")))
     ex = d["mpi_bytes"] / d["halo_bytes_per_iteration"] if d.get("halo_bytes_per_iteration") else float("nan")
     solve = d["solve_seconds"]
     print(f"{m:8} {d['wall_seconds']:8.2f} {d['read_seconds']:6.2f} {d['setup_seconds']:6.2f} {solve:8.2f} "
-          f"{d['write_seconds']:6.2f} {d['iterations']:7d} {ex:9.0f} {d['communications_per_sensor']:10.0f} "
+          f"{d['write_seconds']:6.2f} {d['iterations']:7d} {ex:9.0f} {d['gradient_tests']:5d} {d['communications_per_sensor']:10.0f} "
           f"{d['ml_cost']:16.10g} {d['rmse']:9.6f} {d['rmse_localizable'] / crlb:9.3f}")
 EOF
 done

@@ -1,3 +1,8 @@
+// DistGraph's build, in its order: local ordering (RCM, degree windows), the
+// neighbour-slot directory, the rows routed to their owners in rounds, and the
+// CSR and halo assembly. Over 600 lines because the four steps share the
+// build's private types (Entry, Lists, Rounds) and its temporaries; splitting
+// them into files behind an internal header is open work.
 #include "snl/graph/dist_graph.hpp"
 
 #include <algorithm>
@@ -25,12 +30,12 @@ void pack_offsets(std::vector<std::int64_t>& start, std::vector<int>& scount, in
 }
 
 LocalOrdering default_local_ordering() {
-  const char* e = std::getenv("SNL_LOCAL_ORDER");
+  const char* e = std::getenv("SNL_TEST_LOCAL_ORDER");
   return (e && std::strcmp(e, "gid") == 0) ? LocalOrdering::kGlobalId : LocalOrdering::kRcm;
 }
 
 bool setup_wide_ids(MPI_Comm comm, GlobalId n) {
-  const char* e = std::getenv("SNL_SETUP_IDS");
+  const char* e = std::getenv("SNL_TEST_SETUP_IDS");
   int mine = (e && std::strcmp(e, "64") == 0) ? 1 : 0, any = 0;
   MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_MAX, comm);
   return n > std::numeric_limits<std::int32_t>::max() || any != 0;
@@ -48,9 +53,8 @@ struct Entry {
 // Within consecutive windows of kDegreeWindow nodes, nodes of equal degree
 // next to each other (stable sort by degree): the node-lane kernels pad each
 // chunk of SIMD lanes to its largest degree (kernels.hpp; the sigma of
-// SELL-C-sigma, Kreutzer et al. 2014). Windows of 32 keep RCM's locality:
-// 10M on 2 ranks, relaxation 36.7-37.7 vs 42.7-43.9 ms/iteration without the
-// sort, MM 62.8-64.4 vs 71.4-77.3 (docs/performance.md).
+// SELL-C-sigma, Kreutzer et al. 2014). Windows of 32 keep RCM's locality
+// while cutting the padding.
 void sort_degree_windows(std::vector<std::int64_t>& grp, const std::vector<std::int64_t>& cnt) {
   constexpr std::size_t kDegreeWindow = 32;
   auto deg = [&](std::int64_t v) { return cnt[v + 1] - cnt[v]; };
@@ -278,7 +282,7 @@ class NeighbourSlots {
     dense_.assign(static_cast<std::size_t>(size), 0);
     for (int r = 0; r < size; ++r)
       dense_[r] = r != rank_ && 2 * refs_[r] >= blocks_.first[r + 1] - blocks_.first[r];
-    const char* e = std::getenv("SNL_SETUP_SLOTS");  // tests: "ask" or "block" for every block
+    const char* e = std::getenv("SNL_TEST_SETUP_SLOTS");  // tests: "ask" or "block" for every block
     if (e && std::strcmp(e, "ask") == 0) std::fill(dense_.begin(), dense_.end(), 0);
     if (e && std::strcmp(e, "block") == 0)
       for (int r = 0; r < size; ++r) dense_[r] = r != rank_;
@@ -473,7 +477,7 @@ struct Rounds {
 
 Rounds plan_rounds(MPI_Comm comm, const RowPlan& P, std::size_t entry_bytes) {
   std::int64_t round_bytes = std::int64_t(64) << 20;
-  if (const char* e = std::getenv("SNL_SETUP_ROUND_BYTES")) round_bytes = std::max(1LL, std::atoll(e));  // tests
+  if (const char* e = std::getenv("SNL_TEST_SETUP_ROUND_BYTES")) round_bytes = std::max(1LL, std::atoll(e));  // tests
   const int size = comm_size(comm), rank = comm_rank(comm);
   long long k = std::max<long long>(1, round_bytes / static_cast<long long>(entry_bytes * std::max(1, size - 1)));
   MPI_Allreduce(MPI_IN_PLACE, &k, 1, MPI_LONG_LONG, MPI_MIN, comm);
@@ -821,8 +825,8 @@ void fill_csr(const OwnedLists<Id>& L, const std::vector<std::int64_t>& order, c
   }
   // The lists are read in their own (global) order and each node's block is
   // written to its place in the local order: reading them in local order
-  // instead made order -> cnt -> entries a chain of dependent misses (at 10M
-  // on 2 ranks 3.9 s, three loads taking 75% of it). Stores do not wait.
+  // instead would make order -> cnt -> entries a chain of dependent misses.
+  // Stores do not wait.
   constexpr std::size_t kAhead = 16, kDestAhead = 8, kIdsAhead = 4;
   for (std::size_t v = 0; v < n; ++v) {
     if (v + kAhead < n) __builtin_prefetch(&offsets[ids.owned_to_local[v + kAhead]]);

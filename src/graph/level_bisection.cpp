@@ -22,7 +22,7 @@
 // line of a row and a quarter of the neighbours' labels, and sends few
 // visits to other blocks (the smallest ids of a row are mostly in the lowest
 // blocks); on the default 10M network it reaches 40% of the nodes and costs
-// a fraction of a full pass (docs/performance.md, "The bfs probe").
+// a fraction of a full pass (docs/performance.md, "What limits what").
 // A round after the first runs only while more than 1/64 of the range is
 // unvisited (a bound on the rounds' cost, not on the result: the rest comes
 // last whatever its keys, and no split falls in a rest that small); what is
@@ -85,7 +85,6 @@ class LevelBisection {
         first_(blocks.first[rank_]),
         nb_(static_cast<std::int32_t>(lx.size() - 1)),
         max_levels_(max_levels),
-        trace_(rank_ == 0 && std::getenv("SNL_BFS_TRACE") && std::strcmp(std::getenv("SNL_BFS_TRACE"), "1") == 0),
         label_(static_cast<std::size_t>(nb_), 0),
         level_(static_cast<std::size_t>(nb_), 0),
         frontier_(static_cast<std::size_t>(nb_)),
@@ -141,7 +140,6 @@ class LevelBisection {
   GlobalId first_;
   std::int32_t nb_;
   std::int64_t max_levels_;
-  bool trace_;  // SNL_BFS_TRACE=1 on rank 0: it prints each pass (stderr)
   int depth_ = 0;
   // label: kStages i + stage for a node of active range i (Stage: unvisited,
   // reached by the probe or the pass from s, ordered from r), kDone once its
@@ -323,12 +321,6 @@ bool LevelBisection<Index, Label>::pass(const std::vector<GlobalId>& roots, cons
   std::vector<long long> all(nr, 0);
   MPI_Allreduce(visited_.data(), all.data(), static_cast<int>(nr), MPI_LONG_LONG, MPI_SUM, comm_);
   if (reach) *reach = all;
-  static const char* const kName[] = {"", "probe", "pass from s", "pass from r"};
-  for (std::size_t i = 0; trace_ && i < nr; ++i)
-    if (roots[i] >= 0)
-      std::fprintf(stderr, "bfs: depth %d, range %zu of %lld nodes, %s %lld: %d levels, %lld nodes reached\n", depth_,
-                   i, static_cast<long long>(ranges_[i].size), kName[stage], static_cast<long long>(roots[i]),
-                   far_level[i] - start[i] + 1, all[i]);
   return true;
 }
 

@@ -1,6 +1,8 @@
 // Partitioning (METIS or breadth-first level structures on rank 0, ParMETIS
 // through PT-Scotch, block) and the distributed owner directory that DistGraph
-// builds from.
+// builds from. Over 600 lines because the partitioners share the rows of the
+// partition graph built here (root_csr); one file per partitioner behind this
+// interface is open work.
 #include <metis.h>
 
 #include <algorithm>
@@ -61,8 +63,7 @@ PartitionMethod resolve_partition_method(MPI_Comm comm, GlobalId /*n*/, Partitio
 namespace {
 // bfs_partition with range labels of type Key: one byte where the labels
 // fit (1 + 4 (nparts - 1) of them), so that the label array, read at random
-// once per edge, is a quarter of the size (10 MB at 10M nodes): 1.55-1.82
-// s against 2.03-2.21 at 10M on 2 ranks, by turns.
+// once per edge, is a quarter of the size (10 MB at 10M nodes) and stays in cache.
 constexpr int kByteLabelParts = 64;
 template <class Key>
 std::vector<int> bfs_partition_keyed(const std::vector<std::int64_t>& xadj, const std::vector<std::int32_t>& adjncy,
@@ -331,9 +332,8 @@ std::string route_halves(MPI_Comm comm, const Blocks& blocks, const std::vector<
 // filled, each sorted by neighbour id (the bfs probes follow a row's first
 // entries). Two levels, as DistGraph's neighbour lists: the
 // half-edges go into buckets of consecutive rows (few write streams), then
-// each bucket's rows are counted and filled in cache (counting and filling
-// straight into the block's rows waited on a cache miss per half-edge: 1.2 s
-// of 2.3 at 10M on 2 ranks). Consumes keep and got. Returns false when out
+// each bucket's rows are counted and filled in cache (filling straight into
+// the block's rows would wait on a cache miss per half-edge). Consumes keep and got. Returns false when out
 // of memory.
 template <class Offset, class Index>
 bool block_rows(std::int64_t nb, std::vector<HalfRow<Index>>&& keep, std::vector<HalfRow<Index>>&& got,

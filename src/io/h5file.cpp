@@ -1,6 +1,8 @@
 // Parallel HDF5 layer (see include/snl/h5file.hpp). Every public method is
 // collective and ends with agree(), so a failure seen by one rank becomes the
 // same snl::Error on all ranks and nobody is left waiting in a collective.
+// One file because every method shares the same agree-and-close discipline
+// around the HDF5 C API (error stack, property lists, atomic replace).
 #include "snl/io/h5file.hpp"
 
 #include <fcntl.h>

@@ -12,9 +12,9 @@ namespace {
 // the lanes hold nodes (0, 2, 1, 3) of the chunk (NodeLanes::lane_node), and
 // per-slot scalars (rho, the lane bits) are stored in that order. Only IEEE
 // add/sub/mul/div/sqrt and no FMA, so every lane equals the scalar twin bit
-// for bit. The kernels return normally (GCC emits vzeroupper there): an
-// earlier tail call from AVX2 code into scalar code got none, and the dirty
-// upper ymm state slowed the caller's SSE code by ~40% (docs/performance.md).
+// for bit. The kernels return normally, so that GCC emits vzeroupper: a tail
+// call from AVX2 code into scalar code gets none, and the dirty upper ymm
+// state slows the caller's SSE code.
 #define SNL_AVX2 __attribute__((target("avx2")))
 
 

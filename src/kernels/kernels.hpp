@@ -165,10 +165,8 @@ void run_levels(const LevelPlan& lp, const NodeLanes& nl, int n, HaloPlan& halo,
 
 /// Whether the steps should write their node rows with non-temporal stores:
 /// when `bytes` (the iterate arrays one step streams) exceed what a cache
-/// keeps from one iteration to the next (16 MiB). 10M on 2 ranks: relaxation
-/// 35-36 instead of 39-40 ms/iteration while the VM's bandwidth was low,
-/// equal when it was high; at 100k (in cache) 17% slower, hence the size test
-/// (docs/performance.md).
+/// keeps from one iteration to the next (16 MiB): below that the rows stay in
+/// cache, where non-temporal stores would evict them.
 inline bool stream_rows(std::size_t bytes) { return bytes > (std::size_t(16) << 20); }
 
 /// out[j] = sum over the lanes of norms[j C .. j C + C) in lane order, j < n:

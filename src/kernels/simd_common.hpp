@@ -51,10 +51,7 @@ extern const KernelTable kAvx512Kernels;  // avx512.cpp, 8 lanes
 
 // Software prefetch of the lane arrays a fixed distance ahead (groups at
 // kPrefetchBytes of ranges): the arrays are read in order, but the hardware
-// prefetcher alone left these sqrt/div-heavy loops waiting on memory. At 1M
-// sensors on one core (AVX-512): relaxation 5.9-6.1 -> 5.3-5.8 ms, MM 9.1-9.8
-// -> 8.0-8.3 ms per iteration; 10M on 2 ranks 7-13% faster; no gain for the
-// AVX2 kernels (docs/performance.md). The index is clamped to the last
+// prefetcher alone leaves these sqrt/div-heavy loops waiting on memory. The index is clamped to the last
 // group so that no address past the arrays is formed. EdgeP > 0: also MM's
 // edge rows y (EdgeP doubles per lane and group). Always inlined: GCC
 // takes a function that only prefetches for one without side effects and
@@ -71,10 +68,9 @@ __attribute__((always_inline)) inline void prefetch_group(const NodeLanes& nl, s
 }
 
 // 3D only: the neighbour rows of the group kRowPrefetchGroups ahead. RCM
-// keeps 2D neighbours close (the gathers hit L1/L2, and these prefetches made
-// the 2D relaxation 15% slower), but a 3D BFS level of 1M sensors spans ~10^4
-// rows, so the gathers wait on L3: 1M sensors, one core, relaxation 13.4-13.9
-// -> 9.7-10.3 ms per iteration (16-64 groups ahead alike).
+// keeps 2D neighbours close (the gathers hit L1/L2, where these prefetches
+// only cost), but a 3D BFS level of 1M sensors spans ~10^4 rows, so the
+// gathers wait on L3.
 inline constexpr std::int64_t kRowPrefetchGroups = 16;
 template <int C, int P>
 __attribute__((always_inline)) inline void prefetch_rows(const NodeLanes& nl, std::int64_t g, std::int64_t last,

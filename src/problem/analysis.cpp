@@ -1,5 +1,7 @@
 // Whole-network analyses: degrees, localizability (connectivity, anchoring,
-// measurement counts, infinitesimal rigidity) and the Cramér-Rao bound.
+// measurement counts, infinitesimal rigidity) and the Cramér-Rao bound. One
+// file because the rigidity test and the bound share the Fisher-information
+// assembly and its sparse factorization.
 #include "snl/problem/analysis.hpp"
 
 #include <Eigen/Sparse>

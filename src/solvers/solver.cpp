@@ -1,3 +1,6 @@
+// The Solver's run as named steps (start, phases, passes, tests, records,
+// checkpoints, summary). Over 600 lines because the steps share one Run's
+// state; the stopping rule and the records are candidates for files of their own.
 #include "snl/solvers/solver.hpp"
 
 #include <mpi.h>

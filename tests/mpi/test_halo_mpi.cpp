@@ -54,7 +54,7 @@ TEST(Halo, GhostsReceiveOwnersValues) {
 // every row they own from other block holders. Each owned node's
 // neighbours and values, in global-id order, against the edge list; with the
 // build's 32-bit ids (the default below 2^31 nodes) and its 64-bit ones
-// (SNL_SETUP_IDS=64).
+// (SNL_TEST_SETUP_IDS=64).
 static void check_edges_held_by_one_rank() {
   const int P = world_size(), me = world_rank();
   const GlobalId n = 4000;
@@ -134,13 +134,13 @@ TEST(DistGraph, EdgeValuesOfAnyWidthReachBothEnds) {
 
 TEST(DistGraph, EdgesHeldByOneRankReachTheirOwners) {
   check_edges_held_by_one_rank();
-  setenv("SNL_SETUP_IDS", "64", 1);
+  setenv("SNL_TEST_SETUP_IDS", "64", 1);
   check_edges_held_by_one_rank();
-  unsetenv("SNL_SETUP_IDS");
+  unsetenv("SNL_TEST_SETUP_IDS");
 }
 
 // The setup with 32-bit ids in its temporaries (the merge's rows, the graph
-// build's records and lists) and with 64-bit ones (SNL_SETUP_IDS=64), on a
+// build's records and lists) and with 64-bit ones (SNL_TEST_SETUP_IDS=64), on a
 // network with sigmas and duplicate pairs (some written the other way
 // round): the same merge, local numbering, CSR, values, sigmas, interior,
 // cut and halo; the 64-bit build's temporaries are larger on every rank (so
@@ -156,9 +156,9 @@ TEST(DistGraph, ThirtyTwoAndSixtyFourBitIdsGiveTheSameGraph) {
   }
   ProblemReport rn, rw;
   LocalizationProblem narrow(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kBfs, &rn);
-  if (world_rank() == 0) setenv("SNL_SETUP_IDS", "64", 1);  // on one rank: every rank must take 64 bits
+  if (world_rank() == 0) setenv("SNL_TEST_SETUP_IDS", "64", 1);  // on one rank: every rank must take 64 bits
   LocalizationProblem wide(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kBfs, &rw);
-  unsetenv("SNL_SETUP_IDS");
+  unsetenv("SNL_TEST_SETUP_IDS");
   EXPECT_EQ(rn.merged.merged_sensor_pairs, static_cast<GlobalId>((ne + 6) / 7));
   EXPECT_EQ(rw.merged.merged_sensor_pairs, rn.merged.merged_sensor_pairs);
   EXPECT_EQ(rn.num_sensor_edges, static_cast<GlobalId>(ne));
@@ -194,14 +194,14 @@ static void expect_same_graph(const DistGraph& a, const DistGraph& b, const std:
 
 // The rows' neighbours learn their directory slots either from whole blocks
 // of the directory or by asking for each id (NeighbourSlots, src/graph/
-// dist_graph.cpp); SNL_SETUP_SLOTS forces one way on the rank that sets it.
+// dist_graph.cpp); SNL_TEST_SETUP_SLOTS forces one way on the rank that sets it.
 // Every way, and ranks that mix them, give the same graph.
 TEST(DistGraph, NeighbourSlotsSentWholeOrAskedGiveTheSameGraph) {
   const Network w = make_network({.n = 700, .dim = 2, .radius = 0.08});
   auto build = [&](const char* how, bool only_rank0) {
-    if (how && (!only_rank0 || world_rank() == 0)) setenv("SNL_SETUP_SLOTS", how, 1);
+    if (how && (!only_rank0 || world_rank() == 0)) setenv("SNL_TEST_SETUP_SLOTS", how, 1);
     LocalizationProblem p(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kBfs, nullptr);
-    unsetenv("SNL_SETUP_SLOTS");
+    unsetenv("SNL_TEST_SETUP_SLOTS");
     return p;
   };
   const LocalizationProblem base = build(nullptr, false);
@@ -214,7 +214,7 @@ TEST(DistGraph, NeighbourSlotsSentWholeOrAskedGiveTheSameGraph) {
 }
 
 // The entries and the values leave for their owners in rounds of at most
-// SNL_SETUP_ROUND_BYTES per rank (dist_graph.cpp, Rounds; 64 MiB unless
+// SNL_TEST_SETUP_ROUND_BYTES per rank (dist_graph.cpp, Rounds; 64 MiB unless
 // set); any round size, set on one rank or all, with the slots sent whole or
 // asked (asked slots are answered in the order the rounds read them), gives
 // the same graph and values.
@@ -222,11 +222,11 @@ TEST(DistGraph, RowsSentInRoundsGiveTheSameGraph) {
   Network w = make_network({.n = 700, .dim = 2, .radius = 0.08});
   for (std::size_t e = 0; e < w.sensor_ranges.size(); ++e) w.sensor_sigmas.push_back(0.01 + 0.001 * double(e % 7));
   auto build = [&](const char* bytes, bool only_rank0, const char* slots) {
-    if (bytes && (!only_rank0 || world_rank() == 0)) setenv("SNL_SETUP_ROUND_BYTES", bytes, 1);
-    if (slots) setenv("SNL_SETUP_SLOTS", slots, 1);
+    if (bytes && (!only_rank0 || world_rank() == 0)) setenv("SNL_TEST_SETUP_ROUND_BYTES", bytes, 1);
+    if (slots) setenv("SNL_TEST_SETUP_SLOTS", slots, 1);
     LocalizationProblem p(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kBfs, nullptr);
-    unsetenv("SNL_SETUP_ROUND_BYTES");
-    unsetenv("SNL_SETUP_SLOTS");
+    unsetenv("SNL_TEST_SETUP_ROUND_BYTES");
+    unsetenv("SNL_TEST_SETUP_SLOTS");
     return p;
   };
   const LocalizationProblem base = build(nullptr, false, nullptr);

@@ -1,9 +1,8 @@
 #pragma once
 // How the process takes memory from the system. The setup allocates and frees
 // several gigabytes at 10M sensors; on hosts where the first touch of a page is
-// costly (0.6-1.0 GB/s on this project's VMs against 21 GB/s for a second
-// write, docs/performance.md "Memory first touch") that, not the arithmetic,
-// set about 40% of its time.
+// costly (far slower than a second write, docs/performance.md "Machine and
+// yardstick") that, not the arithmetic, sets much of its time.
 
 #include <cstddef>
 #include <new>

@@ -24,14 +24,11 @@ enum class PartitionMethod { kMetis, kBlock, kParMetis, kAuto, kBfs };
 PartitionMethod parse_partition_method(const std::string& s);
 /// Whether this build has the ParMETIS interface (PT-Scotch's) for kParMetis.
 bool parmetis_available();
-/// kAuto by the measured rule (docs/performance.md, "Parallel setup", "The
-/// bfs partition"): parmetis when the ranks span more than one node (and the
-/// build has it), else bfs. On one node METIS set up 1M and 10M sensors
-/// faster than PT-Scotch on 1, 2 and 4 ranks in every run, and bfs
-/// partitioned them 2.5-4 times faster than METIS with iterations as fast;
-/// the bfs partition runs on every rank's block of rows (nothing of size n on
-/// any rank), so no graph size sends it elsewhere. Across nodes it is not
-/// measured: each breadth-first level is a collective round.
+/// kAuto: parmetis when the ranks span more than one node (and the build has
+/// it), else bfs. On one node bfs partitions several times faster than METIS
+/// with iterations as fast, and it runs on every rank's block of rows
+/// (nothing of size n on any rank), so no graph size sends it elsewhere;
+/// across nodes each of its breadth-first levels would be a collective round.
 /// Collective (it counts the nodes). Other methods are returned unchanged.
 PartitionMethod resolve_partition_method(MPI_Comm comm, GlobalId n, PartitionMethod method);
 
@@ -157,12 +154,12 @@ std::vector<T> exchange_records(MPI_Comm comm, const std::vector<std::vector<T>>
 /// old order, kept for measurement. Results do not depend on it: every node
 /// still sums its neighbours in global-id order.
 enum class LocalOrdering { kRcm, kGlobalId };
-/// kRcm unless the environment sets SNL_LOCAL_ORDER=gid (for benchmarks).
+/// kRcm unless the environment sets SNL_TEST_LOCAL_ORDER=gid (for benchmarks).
 LocalOrdering default_local_ordering();
 
 /// Whether the setup's temporaries (the merge's rows, the graph build's
 /// records and lists) carry 64-bit node ids for a graph of n nodes: from 2^31
-/// nodes on, or where the environment sets SNL_SETUP_IDS=64 on any rank (for
+/// nodes on, or where the environment sets SNL_TEST_SETUP_IDS=64 on any rank (for
 /// tests: both widths give the same problem). Below, 32-bit ids. Collective,
 /// so that every rank takes the same width.
 bool setup_wide_ids(MPI_Comm comm, GlobalId n);

@@ -71,7 +71,7 @@ struct SolverOptions {
   /// Iterations between the gradient rule's tests (each an extra exchange and
   /// a pass over the edges, about three iterations' time), rounded up to a
   /// multiple of the record interval; 0: auto, 10, or 50 from 10,000
-  /// sensors (docs/performance.md, "Bookkeeping outside the iterations").
+  /// sensors (docs/performance.md, "Bookkeeping").
   std::int64_t test_every = 0;
   /// Consensus rounds per BB iteration (Calafiore et al. use 20).
   int bb_rounds = 20;

@@ -1,4 +1,4 @@
-// 003 Table I / Fig. 2 in one process (bench/repro_003_table1.sh builds and
+// 003 Table I / Fig. 2 in one process (repro/repro_003_table1.sh builds and
 // runs it): per noise draw t = 1..TRIALS, the star of `snl generate --dim 1
 // --topology star --sensors 1 --sigma 0.25 --seed t`, the relaxation as
 // `snl solve --algorithm relaxation --seed t --tol 1e-12 --max-iter 100000`

@@ -1,4 +1,4 @@
-"""003 Table I / Fig. 2 from bench/repro_003_table1.sh's per-trial CSV.
+"""003 Table I / Fig. 2 from repro/repro_003_table1.sh's per-trial CSV.
 
 usage: repro_003_table1.py CSV EVALDIR TXT PNG
 EVALDIR holds eval_1.json .. eval_3.json from the CLI, checked against the CSV.

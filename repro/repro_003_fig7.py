@@ -1,7 +1,7 @@
 """003 Fig. 7 in f_hat: per network, sigma and method the mean final f_hat (003 eq. 6,
 the disk relaxation's cost, the paper's measure) over the trials, with the mean
-ML cost beside it, from the per-trial CSVs of bench/repro_003_fig7.sh.
-Usage: /usr/bin/python3 bench/repro_003_fig7.py A.csv B.csv OUT.png"""
+ML cost beside it, from the per-trial CSVs of repro/repro_003_fig7.sh.
+Usage: /usr/bin/python3 repro/repro_003_fig7.py A.csv B.csv OUT.png"""
 import collections
 import csv
 import sys

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Prints the tables of docs/reproduction.md from the raw files in docs/data/.
-  /usr/bin/python3 bench/repro_tables.py"""
+  /usr/bin/python3 repro/repro_tables.py"""
 import csv, os
 from collections import defaultdict
 import numpy as np

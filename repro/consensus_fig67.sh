@@ -6,7 +6,7 @@
 # against messages per node.
 # Writes docs/data/consensus/fig67_*.csv (+ fig67_problem.txt, the commands) and
 # docs/consensus_fig6_7.png, docs/consensus_fig6_7_messages.png.
-# Usage: bench/consensus_fig67.sh [BUILD_DIR]   (default build)
+# Usage: repro/consensus_fig67.sh [BUILD_DIR]   (default build)
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 SNL=${SNL:-$ROOT/${1:-build}/bin/snl}

@@ -10,7 +10,7 @@
 # three bundled noise draws, docs/data/repro_003_fig6_oracle.csv.
 # Writes docs/data/repro_003_fig6.csv (one row per sigma, trial and method),
 # docs/data/repro_003_fig6.txt (the commands and the table) and docs/repro_003_fig6.png.
-# Usage: bench/repro_003_fig6.sh [SNL] [TRIALS]   (default build/bin/snl, 32 as in 003)
+# Usage: repro/repro_003_fig6.sh [SNL] [TRIALS]   (default build/bin/snl, 32 as in 003)
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 SNL=${1:-$ROOT/build/bin/snl}
@@ -49,6 +49,6 @@ for s in 0.01 0.05 0.1; do
   echo "$(basename $net .h5),$(j "$W/c.json" relaxation_objective rmse),$(j "$W/d.json" relaxation_objective rmse iterations communications_per_sensor)" \
     >> "$OUT/repro_003_fig6_oracle.csv"
 done
-/usr/bin/python3 "$ROOT/bench/repro_003_fig6.py" "$OUT/repro_003_fig6.csv" "$ROOT/docs/repro_003_fig6.png" \
+/usr/bin/python3 "$ROOT/repro/repro_003_fig6.py" "$OUT/repro_003_fig6.csv" "$ROOT/docs/repro_003_fig6.png" \
   "$OUT/repro_003_fig6_fixed.csv" | tee -a "$OUT/repro_003_fig6.txt"
 cat "$OUT/repro_003_fig6_oracle.csv" >> "$OUT/repro_003_fig6.txt"

@@ -1,10 +1,10 @@
-"""003 Fig. 6 / Table II from bench/repro_003_fig6.sh's per-trial CSV: per sigma and
+"""003 Fig. 6 / Table II from repro/repro_003_fig6.sh's per-trial CSV: per sigma and
 method the RMSE (003 eq. 29 over the trials), the mean communications per sensor
 (messages) and iterations, the mean final ML cost, and for esdp-dist the relative
 distance of its ESDP objective from the centralized ESDP's of the same trial.
 With a third argument (the run at the Table II counts, a fixed number of
 iterations) its table too.
-Usage: /usr/bin/python3 bench/repro_003_fig6.py TRIALS.csv OUT.png [FIXED.csv]"""
+Usage: /usr/bin/python3 repro/repro_003_fig6.py TRIALS.csv OUT.png [FIXED.csv]"""
 import collections
 import csv
 import math

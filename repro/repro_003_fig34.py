@@ -4,7 +4,7 @@ for EDM completion, the SDP relaxation, ESDP and the disk relaxation (003 eq. 6,
 Algorithm 1 to ||grad f_hat|| <= 1e-6), on one fixed 50-sensor network (the
 geometry of inputs/net50_s0.01.h5) with fresh noise (003 eq. 28) each trial.
 
-  /usr/bin/python3 bench/repro_003_fig34.py [SNL] [TRIALS] [NETWORK TAG]
+  /usr/bin/python3 repro/repro_003_fig34.py [SNL] [TRIALS] [NETWORK TAG]
 writes docs/data/repro_003_fig34{TAG}.csv and docs/repro_003_fig3{TAG}.png, docs/repro_003_fig4{TAG}.png
 (network B: inputs/net50_allanchors_s0.01.h5 _B).
 """
