@@ -13,6 +13,7 @@
 #include "graph/partition_detail.hpp"
 #include "snl/core/mpi_util.hpp"
 #include "snl/graph/dist_graph.hpp"
+#include "snl/graph/partition.hpp"
 #include "snl/io/network.hpp"
 
 #ifdef SNL_HAVE_PARMETIS
