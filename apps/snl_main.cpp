@@ -94,8 +94,9 @@ void add_solve(CLI::App& app, Commands& c) {
   s->add_option("-o,--output", c.solve.output, "result file")->required();
   s->add_option("--algorithm", c.solve.solver.algorithm, snl::algorithm_names("|"))->capture_default_str();
   s->add_option("--max-iter", c.solve.solver.max_iter, "iterations per phase")->capture_default_str();
-  s->add_option("--tol", c.solve.solver.tol,
-                "tolerance of --stop (0: run --max-iter iterations; default 1e-5 with gradient, 1e-6 with papers)");
+  s->add_option_function<double>(
+      "--tol", [&c](const double& v) { c.solve.solver.tol = v; },
+      "tolerance of --stop (0: run --max-iter iterations; default 1e-5 with gradient, 1e-6 with papers)");
   CLI::Option* stop = s->add_option("--stop", c.solve.solver.stop,
                                      "stopping rule with --tol: papers (relative change of x) or gradient (relative "
                                      "gradient of the phase's cost; docs/quality.md; esdp-dist: papers)")

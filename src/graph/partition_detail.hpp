@@ -1,16 +1,23 @@
 #pragma once
-// Internal to the graph layer (not installed): the partition's graph on rank
-// 0, exposed for its test against the serial twin; the id blocks.
+// Internal to the graph layer (not installed): the id blocks, the partition
+// graph's rows (partition_rows.cpp; root_csr is tested against the serial
+// twin) and the partitioners behind partition_nodes, one file each.
 #include <mpi.h>
 
 #include <algorithm>
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "snl/core/common.hpp"
+#include "snl/graph/partition.hpp"
 #include "snl/io/network.hpp"
+
+namespace snl {
+struct BlockRows;
+}  // namespace snl
 
 namespace snl::detail {
 
@@ -70,5 +77,58 @@ template <class Index>
 bool level_bisection(MPI_Comm comm, const Blocks& blocks, const std::vector<std::int64_t>& lx,
                      const std::vector<Index>& ladj, int nparts, std::int64_t max_levels, std::vector<int>& owner,
                      std::int64_t& bytes, std::vector<std::int32_t>* keys = nullptr);
+
+// Records the seconds since the previous mark under a phase name.
+struct PhaseMarks {
+  std::vector<std::pair<std::string, double>> phases;
+  double mark = MPI_Wtime();
+  void operator()(const char* name) {
+    const double now = MPI_Wtime();
+    phases.emplace_back(name, now - mark);
+    mark = now;
+  }
+};
+
+// A half-edge on its way to the block holder of its node: the node's offset
+// in that block and the neighbour.
+template <class Index>
+struct HalfRow {
+  std::int32_t v;
+  Index u;
+};
+
+// The partition graph's steps (partition_rows.cpp): each pair's two
+// half-edges to the block holders of their nodes (keep: this rank's block;
+// got: received); the rows of a block of nb nodes from them, each ascending;
+// all rows as CSR on rank 0. Collective but fill_block_rows; "" or why not.
+template <class Index>
+std::string route_half_rows(MPI_Comm comm, const Blocks& blocks, const std::vector<GlobalId>& edges,
+                            std::vector<HalfRow<Index>>& keep, std::vector<HalfRow<Index>>& got, std::int64_t& bytes);
+template <class Offset, class Index>
+bool fill_block_rows(std::int64_t nb, std::vector<HalfRow<Index>>&& keep, std::vector<HalfRow<Index>>&& got,
+                     std::vector<Offset>& lx, std::vector<Index>& ladj, std::int64_t& bytes);
+template <class Offset, class Index>
+std::string root_csr_impl(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, std::vector<Offset>& xadj,
+                          std::vector<Index>& adjncy, std::int64_t& peak);
+
+// The partitioners on rank 0: owners of all n nodes there (metis_partition.cpp,
+// bfs_partition.cpp), and partition_on_root, which runs one and scatters each
+// rank its block's owners (partition.cpp). Collective; "" or why not.
+std::string metis_on_root(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, std::vector<int>& owner,
+                          PhaseMarks& phase, std::int64_t& peak);
+std::string bfs_on_root(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, std::vector<int>& owner,
+                        PhaseMarks& phase, std::int64_t& peak);
+std::string partition_on_root(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges, PartitionMethod method,
+                              std::vector<int>& block, PhaseMarks& phase, std::int64_t& peak);
+
+// The distributed partitioners: owners of this rank's block of nodes
+// (bfs_partition.cpp; parmetis_partition.cpp where built with ParMETIS).
+std::string bfs_partition_blocks(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges,
+                                 const BlockRows* rows, std::vector<int>& block, std::vector<std::int32_t>& keys,
+                                 PhaseMarks& phase, std::int64_t& peak, std::string& note);
+#ifdef SNL_HAVE_PARMETIS
+std::string parmetis_partition(MPI_Comm comm, GlobalId n, const std::vector<GlobalId>& edges,
+                               std::vector<int>& block, PhaseMarks& phase, std::int64_t& peak);
+#endif
 
 }  // namespace snl::detail

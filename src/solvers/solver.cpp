@@ -30,7 +30,7 @@ std::string SolverOptions::validate() const {
   if (!find_algorithm(algorithm))
     return "unknown --algorithm '" + algorithm + "' (expected " + algorithm_names(", ", " or ") + ")";
   if (max_iter < 0) return "--max-iter must be >= 0";
-  if (!std::isnan(tol) && (!(tol >= 0) || !std::isfinite(tol))) return "--tol must be a finite number >= 0";
+  if (tol && (!(*tol >= 0) || !std::isfinite(*tol))) return "--tol must be a finite number >= 0";
   if (!(grad_tol >= 0) || !std::isfinite(grad_tol)) return "--grad-tol must be a finite number >= 0";
   if (history_every < 0) return "--history-every must be >= 0";
   if (test_every < 0) return "--test-every must be >= 0";
@@ -80,8 +80,7 @@ std::string SolverOptions::unsupported_option() const {
       {loss != defaults.loss, "--loss", &AlgorithmInfo::measurement_model, "l2"},
       {esdp_rho != defaults.esdp_rho, "--esdp-rho", &AlgorithmInfo::admm, "1"},
   };
-  // tol's default is NaN (the stopping rule's own default): "given" means not NaN.
-  const bool tol_given = !std::isnan(tol);
+  const bool tol_given = tol.has_value();
   if (a->one_shot && (tol_given || max_iter != defaults.max_iter))
     return std::string(tol_given ? "--tol" : "--max-iter") + " is not honoured by --algorithm " +
            algorithm + " (a convex relaxation solved once by an SDP solver, to its own tolerance); leave it out";

@@ -103,11 +103,11 @@ TEST(Solver, StopsOnRelativeImprovementAndRecordsHistory) {
     const IterationSummary& h = s.history[t];
     if (h.iteration == 0) continue;  // a phase's starting point (rel_change NaN)
     if (t + 1 == s.history.size() || s.history[t + 1].iteration == 0) {
-      EXPECT_LE(h.rel_change, opt.tol) << h.phase;
+      EXPECT_LE(h.rel_change, *opt.tol) << h.phase;
       EXPECT_LT(h.iteration, opt.max_iter) << h.phase;
       total += h.iteration;
     } else {
-      missed += h.rel_change <= opt.tol;  // the phase should have stopped here
+      missed += h.rel_change <= *opt.tol;  // the phase should have stopped here
     }
   }
   EXPECT_EQ(missed, 0) << "iterations that met the stopping rule without stopping";

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -34,11 +35,11 @@ struct SolverOptions {
   std::string algorithm = "pipeline";
   /// Iterations per phase (the pipeline has two phases).
   std::int64_t max_iter = 10000;
-  /// Tolerance of the stopping rule `stop` (0 disables it; NaN: the rule's
+  /// Tolerance of the stopping rule `stop` (0 disables it; unset: the rule's
   /// default, stop_tol()): with papers, the relative improvement
   /// ||x(k) - x(k-1)|| / ||x(k)|| at or below which a phase stops (003,
   /// Sec. V uses 1e-6); with gradient, the relative gradient.
-  double tol = std::numeric_limits<double>::quiet_NaN();
+  std::optional<double> tol;
   /// Stopping rule of each phase, with --tol as its tolerance:
   ///   papers:   ||x(k) - x(k-1)|| / ||x(k)|| <= tol (003, Sec. V; it shrinks
   ///             with the step 1/L and with n, not with the distance to the optimum);
@@ -59,8 +60,8 @@ struct SolverOptions {
   /// A copy with auto resolved (the pipeline's refine), as the Solver runs it
   /// and its checkpoints record it.
   SolverOptions resolved() const;
-  /// tol, or where it is NaN the rule's default: 1e-6 (papers), 1e-5 (gradient).
-  double stop_tol() const { return std::isnan(tol) ? (stop == "papers" ? 1e-6 : 1e-5) : tol; }
+  /// tol, or where it is unset the rule's default: 1e-6 (papers), 1e-5 (gradient).
+  double stop_tol() const { return tol ? *tol : (stop == "papers" ? 1e-6 : 1e-5); }
   /// Stop when the norm of the gradient the method computes falls to this
   /// (the relaxation's grad f_hat at the extrapolated point). 0 disables it.
   double grad_tol = 0.0;
