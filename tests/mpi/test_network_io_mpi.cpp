@@ -1,4 +1,4 @@
-// Collective network reading (src/io/network_io.cpp) on 1, 2 and 3 ranks:
+// Collective network reading (src/io/network.cpp) on 1, 2 and 3 ranks:
 // slabs tile the file, errors are identical on every rank (the first bad row
 // of the whole file wins).
 #include <gtest/gtest.h>

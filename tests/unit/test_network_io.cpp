@@ -1,4 +1,4 @@
-// Network files (src/io/network_io.cpp): write_network / read_network_serial
+// Network files (src/io/network.cpp): write_network / read_network_serial
 // round trips, one test per kind of broken file (each must give a clear
 // snl::Error naming the dataset and row), and failed writes.
 #include <gtest/gtest.h>

@@ -1,6 +1,9 @@
 #pragma once
 // The network: anchors, range measurements and (optionally) true positions,
 // as stored in the HDF5 network file (docs/formats.md, shared spec v1).
+// Implemented by src/io/network.cpp (reading and writing files) and
+// src/io/validate.cpp (validation and merging, without MPI or HDF5: the fuzz
+// target links it alone).
 #include <mpi.h>
 
 #include <cstdint>
