@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/phase_clock.hpp"
 #include "snl/core/common.hpp"
 #include "snl/graph/dist_graph.hpp"
 
@@ -22,22 +23,6 @@ template <class Id>
 struct Entry {
   Id nbr;
   std::int32_t owner, index;
-};
-
-// Seconds of the constructor's phases (DistGraph::build_phases): done(name)
-// records the time since the previous mark.
-class PhaseClock {
- public:
-  explicit PhaseClock(std::vector<std::pair<std::string, double>>& out) : out_(out), mark_(MPI_Wtime()) {}
-  void done(const char* name) {
-    const double now = MPI_Wtime();
-    out_.emplace_back(name, now - mark_);
-    mark_ = now;
-  }
-
- private:
-  std::vector<std::pair<std::string, double>>& out_;
-  double mark_;
 };
 
 // The owned nodes and their neighbour lists, indexed by position in `owned`

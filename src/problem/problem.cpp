@@ -5,6 +5,7 @@
 #include <numeric>
 #include <stdexcept>
 
+#include "core/phase_clock.hpp"
 #include "snl/core/memory.hpp"
 #include "snl/core/mpi_util.hpp"
 #include "snl/core/random.hpp"
@@ -38,22 +39,6 @@ struct DisjointSets {
 int slab_holder(const std::vector<GlobalId>& starts, GlobalId g) {
   return static_cast<int>(std::upper_bound(starts.begin(), starts.end(), g) - starts.begin()) - 1;
 }
-
-// Seconds of the setup phases (ProblemReport::setup_phases): done(name)
-// records the time since the previous mark.
-class SetupClock {
- public:
-  explicit SetupClock(std::vector<std::pair<std::string, double>>& out) : out_(out), mark_(MPI_Wtime()) {}
-  void done(const std::string& name) {
-    const double now = MPI_Wtime();
-    out_.emplace_back(name, now - mark_);
-    mark_ = now;
-  }
-
- private:
-  std::vector<std::pair<std::string, double>>& out_;
-  double mark_;
-};
 
 // The measurements after step 1: flat (i, j) / (i, k) pairs with their ranges
 // and, where the file has them (on any rank), their sigmas.
@@ -285,7 +270,7 @@ void LocalizationProblem::build(MPI_Comm comm, const Network& slab, Network* con
   // fresh pages; returned to the system at the end (snl/core/memory.hpp).
   const ReuseFreedMemory reuse;
   ProblemReport rep;
-  SetupClock clock(rep.setup_phases);
+  PhaseClock clock(rep.setup_phases);
   Measurements m = merge_measurements(comm, slab, rep);
   if (consumed) {  // the merged lists hold them now; the truth and flags rows are still to come
     release(consumed->anchor_edges);
