@@ -13,7 +13,7 @@ while read -r f; do
   for np in 1 2; do
     set +e
     timeout 60 "$MPIEXEC" "$MPIEXEC_NUMPROC_FLAG" $np --oversubscribe "$SNL" solve "$f" -o "$T/keep.h5" \
-      --max-iter 5 --tol 0 -q > "$T/out" 2> "$T/err"
+      --max-iter 5 --tol 0 -q < /dev/null > "$T/out" 2> "$T/err"
     rc=$?
     set -e
     [ $rc -eq 124 ] && fail "$name np=$np: hang (killed by timeout)"
@@ -37,7 +37,8 @@ while read -r f; do
 done < "$T/list"
 echo "bad_input: $n failing runs checked"
 # Invalid solver options: one clear message, a non-zero exit, the output untouched.
-for bad in "--temporal-block 0" "--temporal-block 65" "--max-iter -1" "--test-every -1" "--test-every 20 --stop papers"; do
+for bad in "--temporal-block 0" "--temporal-block 65" "--max-iter -1" "--test-every -1" "--test-every 20 --stop papers" \
+           "--tol nan" "--tol -1" "--tol inf"; do
   set +e
   # shellcheck disable=SC2086
   mpi 2 "$SNL" solve "$T/net.h5" -o "$T/keep.h5" $bad -q > /dev/null 2> "$T/err"; rc=$?
@@ -45,7 +46,10 @@ for bad in "--temporal-block 0" "--temporal-block 65" "--max-iter -1" "--test-ev
   [ $rc -ne 0 ] && [ $rc -lt 128 ] || fail "$bad: exit status $rc"
   [ "$(grep -c '^snl: error: ' "$T/err")" -eq 1 ] || { cat "$T/err"; fail "$bad: expected exactly one error message"; }
   [ "$(md5sum < "$T/keep.h5")" = "$sum0" ] || fail "$bad: existing output was modified"
-  case $bad in --test-every*) grep -q -- "--test-every" "$T/err" || { cat "$T/err"; fail "$bad: unclear message"; } ;; esac
+  case $bad in
+    --test-every*) grep -q -- "--test-every" "$T/err" || { cat "$T/err"; fail "$bad: unclear message"; } ;;
+    --tol*) grep -q -- "--tol must be a finite number" "$T/err" || { cat "$T/err"; fail "$bad: unclear message"; } ;;
+  esac
 done
 # Output directory missing, and an unwritable output: clear errors, no hang.
 set +e
