@@ -110,7 +110,16 @@ void add_solve(CLI::App& app, Commands& c) {
   s->add_option("--grad-tol", c.solve.solver.grad_tol,
                 "gradient norm tolerance (0: off; " + honoured_by(&Info::gradient_stop) + ")")
       ->capture_default_str();
-  s->add_option("--init", c.solve.init, "'random' or a file with dataset positions [n,p]")->capture_default_str();
+  s->add_option("--init", c.solve.init,
+                "auto|random|dv or a file with dataset positions [n,p] (auto: dv for dv-pipeline, else random; dv: "
+                "multilateration from path distances to the nearest anchors)")
+      ->capture_default_str();
+  s->add_option("--smooth-iter", c.solve.solver.smooth_iter,
+                "dv-pipeline: relaxation iterations between its start and mm-accel")
+      ->capture_default_str();
+  s->add_option("--settle-iter", c.solve.solver.settle_iter,
+                "dv-pipeline: mm-accel iterations before ml-agd (plain l2 model)")
+      ->capture_default_str();
   s->add_option("--seed", c.solve.solver.seed, "seed of --init random and of the async activation clock")
       ->capture_default_str();
   s->add_option("--partition", c.solve.partition,

@@ -12,6 +12,7 @@
 #include "snl/core/memory.hpp"
 #include "snl/io/network.hpp"
 #include "snl/io/result_io.hpp"
+#include "snl/solvers/dv_start.hpp"
 
 namespace snl {
 
@@ -73,8 +74,9 @@ PartitionMethod check_solve_command(const SolveCommand& cmd, MPI_Comm comm) {
   if (cmd.check_monotone_given && alg && !alg->monotone_surrogate)
     throw UsageError("--check-monotone is not honoured by --algorithm " + cmd.solver.algorithm + " (only by " +
                      algorithms_with(&AlgorithmInfo::monotone_surrogate) + "); leave it out");
-  if (alg && alg->one_shot && (cmd.init != "random" || !cmd.checkpoint.empty() || !cmd.restart.empty()))
-    throw UsageError(std::string(cmd.init != "random" ? "--init FILE" : "--checkpoint/--restart") +
+  const bool init_given = cmd.init != "random" && cmd.init != "auto";
+  if (alg && alg->one_shot && (init_given || !cmd.checkpoint.empty() || !cmd.restart.empty()))
+    throw UsageError(std::string(init_given ? "--init" : "--checkpoint/--restart") +
                      " is not honoured by --algorithm " + cmd.solver.algorithm +
                      " (a convex relaxation solved once: it needs no start and has no iterations to resume)");
   const std::string bad = cmd.solver.validate();
@@ -157,10 +159,29 @@ LoadedProblem load_problem(const SolveCommand& cmd, PartitionMethod pm, bool tal
   return lp;
 }
 
-// --init random, a positions file, or (with --restart) a placeholder the checkpoint replaces.
-std::vector<double> initial_positions(const SolveCommand& cmd, const LocalizationProblem& prob, MPI_Comm comm) {
+// --init auto resolved: dv for dv-pipeline, else random.
+std::string resolved_init(const SolveCommand& cmd) {
+  if (cmd.init != "auto") return cmd.init;
+  const AlgorithmInfo* a = find_algorithm(cmd.solver.algorithm);
+  return a && a->id == AlgorithmId::kDvPipeline ? "dv" : "random";
+}
+
+// --init random or dv, a positions file, or (with --restart) a placeholder the checkpoint replaces.
+std::vector<double> initial_positions(const SolveCommand& cmd, LocalizationProblem& prob, DvStartReport* dv,
+                                      bool talk, MPI_Comm comm) {
   if (!cmd.restart.empty()) return std::vector<double>(std::size_t(prob.num_owned()) * prob.dim(), 0.0);
-  if (cmd.init == "random") return random_initial_positions(prob, cmd.solver.seed);
+  const std::string init = resolved_init(cmd);
+  if (init == "random") return random_initial_positions(prob, cmd.solver.seed);
+  if (init == "dv") {
+    std::vector<double> x = dv_initial_positions(prob, cmd.solver.seed, dv);
+    if (talk)
+      std::fprintf(stderr,
+                   "start: distance-vector multilateration, %lld rounds, path correction %.4f, %lld sensors without "
+                   "an anchor path, %.3f s\n",
+                   static_cast<long long>(dv->rounds), dv->correction, static_cast<long long>(dv->without_anchor),
+                   dv->seconds);
+    return x;
+  }
   GlobalId b, e;
   block_range(prob.num_sensors(), comm_size(comm), comm_rank(comm), b, e);
   const auto rows = read_positions(cmd.init, comm, prob.num_sensors(), prob.dim(), b, e - b);
@@ -276,8 +297,8 @@ MemoryTotals memory_totals(const LocalizationProblem& prob, const ProblemReport&
 }
 
 // The --json summary, keys in their established order; a flat list of keys, hence its length.
-std::string json_summary(const SolveCommand& cmd, const LoadedProblem& lp, const Summary& s, const SolveTimes& t,
-                         const MemoryTotals& m) {
+std::string json_summary(const SolveCommand& cmd, const LoadedProblem& lp, const Summary& s, const DvStartReport& dv,
+                         const SolveTimes& t, const MemoryTotals& m) {
   const LocalizationProblem& prob = *lp.prob;
   const ProblemReport& rep = lp.rep;
   const double n_sens = static_cast<double>(prob.num_sensors());
@@ -332,6 +353,16 @@ std::string json_summary(const SolveCommand& cmd, const LoadedProblem& lp, const
   for (const auto& ph : s.phase_iterate_seconds) j.add(ph.first + "_iterate_seconds", ph.second);
   for (const auto& ph : s.phase_traffic_bytes)
     if (std::isfinite(ph.second)) j.add(ph.first + "_traffic_bytes_per_iteration", ph.second);
+  j.add("start", cmd.restart.empty() ? (resolved_init(cmd) == "dv" || resolved_init(cmd) == "random" ? resolved_init(cmd) : "file") : "restart");
+  if (cmd.restart.empty() && resolved_init(cmd) == "dv")
+    j.add("start_seconds", dv.seconds)
+        .add("start_rounds", dv.rounds)
+        .add("start_correction", dv.correction)
+        .add("start_paths_seconds", dv.paths_seconds)
+        .add("start_correction_seconds", dv.correction_seconds)
+        .add("start_multilateration_seconds", dv.multilateration_seconds)
+        .add("start_mpi_bytes", dv.mpi_bytes)
+        .add("start_without_anchor", static_cast<std::int64_t>(dv.without_anchor));
   j.add("simd", detail::simd_name());
   j.add("temporal_block", cmd.solver.temporal_block);
   for (const auto& ph : rep.setup_phases) j.add("setup_" + ph.first + "_seconds", ph.second);
@@ -359,7 +390,8 @@ int run_solve(const SolveCommand& cmd, MPI_Comm comm) {
   t.read = lp.t_read;
   t.setup = lp.t_setup;
   report_restart(cmd, lp, talk, comm);
-  const std::vector<double> x0 = initial_positions(cmd, *lp.prob, comm);
+  DvStartReport dv;
+  const std::vector<double> x0 = initial_positions(cmd, *lp.prob, &dv, talk, comm);
   std::vector<double> x;
   const Summary s = run_solver(cmd, lp, x0, &x, comm);
   t.solve = MPI_Wtime();
@@ -371,7 +403,8 @@ int run_solve(const SolveCommand& cmd, MPI_Comm comm) {
   write_result_file(cmd, lp, s, x, comm);
   t.write = MPI_Wtime();
   if (!cmd.json.empty())
-    detail::write_text_on_root(cmd.json, json_summary(cmd, lp, s, t, memory_totals(*lp.prob, lp.rep, comm)), comm);
+    detail::write_text_on_root(cmd.json, json_summary(cmd, lp, s, dv, t, memory_totals(*lp.prob, lp.rep, comm)),
+                               comm);
   if (talk) std::fprintf(stderr, "%s\n", s.brief_report().c_str());
   if (talk) report_iteration_cap(cmd, s);
   return s.termination == TerminationType::kFailure ? 4 : 0;

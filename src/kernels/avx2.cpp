@@ -102,14 +102,14 @@ SNL_AVX2 void relax_chunks_avx2(const LocalizationProblem& prob, const NodeLanes
       const __m256d r = _mm256_loadu_pd(nl.rho.data() + 4 * g);
       for (int k = 0; k < P; ++k) z[k] = _mm256_sub_pd(W[k], z[k]);
       const __m256d nz = _mm256_sqrt_pd(square_sum(z, P));
-      const __m256d mask = _mm256_cmp_pd(nz, r, _CMP_GT_OQ);
+      const __m256d mask = _mm256_cmp_pd(nz, s.ml ? _mm256_setzero_pd() : r, _CMP_GT_OQ);
       const __m256d cf = _mm256_sub_pd(one, _mm256_div_pd(r, nz));
       for (int k = 0; k < P; ++k) A[k] = _mm256_add_pd(A[k], _mm256_and_pd(_mm256_mul_pd(cf, z[k]), mask));
     }
     if (nl.has_anchor[c]) {  // rare at scale: through memory, one node at a time
       alignas(32) double tmp[4 * P];
       store_own<P>(tmp, A, false);
-      for (int q = 0; q < 4; ++q) add_anchor_disk_terms(prob, v0 + q, s.w + i0 + P * q, tmp + P * q);
+      for (int q = 0; q < 4; ++q) add_anchor_disk_terms(prob, v0 + q, s.w + i0 + P * q, tmp + P * q, s.ml);
       load_own<P>(tmp, A);
     }
     __m256d X[P], N[P], D[P], WN[P];

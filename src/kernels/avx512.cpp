@@ -116,14 +116,14 @@ SNL_AVX512 void relax_chunks_avx512(const LocalizationProblem& prob, const NodeL
       const __m512d r = _mm512_loadu_pd(nl.rho.data() + 8 * g);
       for (int k = 0; k < P; ++k) z[k] = _mm512_sub_pd(W[k], z[k]);
       const __m512d nz = _mm512_sqrt_pd(square_sum8(z, P));
-      const __mmask8 out = _mm512_cmp_pd_mask(nz, r, _CMP_GT_OQ);
+      const __mmask8 out = _mm512_cmp_pd_mask(nz, s.ml ? _mm512_setzero_pd() : r, _CMP_GT_OQ);
       const __m512d cf = _mm512_sub_pd(one, _mm512_div_pd(r, nz));
       for (int k = 0; k < P; ++k) A[k] = _mm512_mask_add_pd(A[k], out, A[k], _mm512_mul_pd(cf, z[k]));
     }
     if (nl.has_anchor[c]) {
       alignas(64) double tmp[8 * P];
       store_own8<P>(tmp, A, false);
-      for (int q = 0; q < 8; ++q) add_anchor_disk_terms(prob, v0 + q, s.w + i0 + P * q, tmp + P * q);
+      for (int q = 0; q < 8; ++q) add_anchor_disk_terms(prob, v0 + q, s.w + i0 + P * q, tmp + P * q, s.ml);
       load_own8<P>(tmp, A);
     }
     __m512d X[P], N[P], D[P], WN[P];

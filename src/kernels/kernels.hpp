@@ -48,7 +48,9 @@ bool set_simd_enabled(bool on);
 
 /// Anchor terms e(x_v - a_k, r_vk) of owned node v added to acc in anchor-id
 /// order (scalar: a node has few).
-void add_anchor_disk_terms(const LocalizationProblem& prob, LocalId v, const double* xv, double* acc);
+/// With `ml`, the ML cost's anchor gradient terms instead (disk_term).
+void add_anchor_disk_terms(const LocalizationProblem& prob, LocalId v, const double* xv, double* acc,
+                           bool ml = false);
 
 /// SIMD lanes of the node-lane kernels: 8 where the CPU has AVX-512F/DQ, else
 /// 4. Fixed at start-up from the CPU and SNL_SIMD (0, avx2, avx512), not by
@@ -191,6 +193,9 @@ struct RelaxStep {
   double L, beta;
   double* norms;
   bool stream = false;  ///< non-temporal stores of xn and wn (stream_rows; p = 2 only)
+  /// The ML cost's gradient instead of f_hat's: every term (1 - rho/|z|) z
+  /// with |z| > 0 (ml-agd, relaxation.cpp).
+  bool ml = false;
 };
 void relax_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
                   const RelaxStep& s);

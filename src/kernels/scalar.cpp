@@ -24,10 +24,10 @@ void relax_chunk_scalar(const LocalizationProblem& prob, const NodeLanes& nl, st
     double acc[P] = {}, t[P];
     for (std::int64_t g = g0; g < g1; ++g) {
       if (!((nl.real[g] >> L) & 1)) continue;
-      disk_term<P>(s.w + i0, s.w + std::size_t(nl.adj[g * C + q]) * P, nl.rho[g * C + L], t);
+      disk_term<P>(s.w + i0, s.w + std::size_t(nl.adj[g * C + q]) * P, nl.rho[g * C + L], t, s.ml);
       for (int k = 0; k < P; ++k) acc[k] += t[k];
     }
-    if (aoff[v] != aoff[v + 1]) add_anchor_disk_terms(prob, v, s.w + i0, acc);
+    if (aoff[v] != aoff[v + 1]) add_anchor_disk_terms(prob, v, s.w + i0, acc, s.ml);
     for (int k = 0; k < P; ++k) {
       const double now = s.w[i0 + k] - acc[k] / s.L, d = now - s.x[i0 + k];
       s.xn[i0 + k] = now;
@@ -100,7 +100,7 @@ const KernelTable kScalarKernels = {{relax_chunks_scalar<2>, relax_chunks_scalar
 const RelaxChunksFn kScalarRelax1 = relax_chunks_scalar<1>;
 const MMChunksFn kScalarMM1 = mm_chunks_scalar<1>;
 
-void add_anchor_disk_terms(const LocalizationProblem& prob, LocalId v, const double* xv, double* acc) {
+void add_anchor_disk_terms(const LocalizationProblem& prob, LocalId v, const double* xv, double* acc, bool ml) {
   const int p = prob.dim();
   const auto& aoff = prob.anchor_offsets();
   const auto& aid = prob.anchor_ids();
@@ -110,11 +110,11 @@ void add_anchor_disk_terms(const LocalizationProblem& prob, LocalId v, const dou
   for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
     const double* a = anc + std::size_t(aid[e]) * p;
     if (p == 2)
-      disk_term<2>(xv, a, ar[e], t);
+      disk_term<2>(xv, a, ar[e], t, ml);
     else if (p == 3)
-      disk_term<3>(xv, a, ar[e], t);
+      disk_term<3>(xv, a, ar[e], t, ml);
     else
-      disk_term<1>(xv, a, ar[e], t);
+      disk_term<1>(xv, a, ar[e], t, ml);
     for (int c = 0; c < p; ++c) acc[c] += t[c];
   }
 }

@@ -18,15 +18,17 @@ namespace {
 // Branch-free disk residual: the mask zeroes the term where |z| <= rho (or z is
 // not finite), which leaves the node's sum bit-identical to the branching form
 // (the sum starts at +0.0 and adding +0.0 changes nothing but the sign of an
-// all-zero sum, which cannot be -0.0 here). See docs/performance.md.
+// all-zero sum, which cannot be -0.0 here). See docs/performance.md. With
+// `ml` the mask is |z| > 0 instead: (1 - rho/|z|) z is then the ML cost's
+// edge gradient (z = 0: the zero subgradient).
 template <int P>
-inline void disk_term(const double* xv, const double* xu, double rho, double* t) {
+inline void disk_term(const double* xv, const double* xu, double rho, double* t, bool ml = false) {
   double z[P];
   for (int c = 0; c < P; ++c) z[c] = xv[c] - xu[c];
   double s = 0;
   for (int c = 0; c < P; ++c) s += z[c] * z[c];
   const double nz = std::sqrt(s);
-  const std::uint64_t mask = nz > rho ? ~std::uint64_t(0) : 0;
+  const std::uint64_t mask = nz > (ml ? 0.0 : rho) ? ~std::uint64_t(0) : 0;
   const double cf = 1.0 - rho / nz;
   for (int c = 0; c < P; ++c) {
     const double a = cf * z[c];

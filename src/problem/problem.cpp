@@ -293,7 +293,9 @@ void LocalizationProblem::build(MPI_Comm comm, const Network& slab, Network* con
   for (const auto& ph : rep.partition.phases) rep.setup_phases.emplace_back("partition." + ph.first, ph.second);
   rep.setup_bytes.emplace_back("partition", rep.partition.peak_bytes);
   rep.setup_bytes.emplace_back("directory", owners.memory_bytes());
-  graph_ = DistGraph(comm, owners, std::move(rows), std::max(dim_, 2));
+  // The widest exchange: the distance-vector start's anchor lists, (id,
+  // distance) x 3p and a flag (solvers/dv_start.cpp).
+  graph_ = DistGraph(comm, owners, std::move(rows), std::max(2, 6 * dim_ + 1));
   if (m.has_ssigmas) {
     sensor_sigmas_ = graph_.take_last_edge_column();
     has_sensor_sigmas_ = true;

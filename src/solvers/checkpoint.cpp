@@ -334,6 +334,7 @@ std::string checkpoint_options(const SolverOptions& opt) {
   if (opt.weights != "auto") os << "|weights=" << opt.weights;
   if (opt.loss != "l2") os << "|loss=" << opt.loss;
   if (opt.esdp_rho != 1.0) os << "|esdp_rho=" << opt.esdp_rho;
+  if (opt.algorithm == "dv-pipeline") os << "|smooth_iter=" << opt.smooth_iter << "|settle_iter=" << opt.settle_iter;
   if (opt.stop != "papers") os << "|stop=" << opt.stop;
   if (opt.algorithm == "pipeline" && opt.refine != "mm") os << "|refine=" << opt.refine;
   return os.str();

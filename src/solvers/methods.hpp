@@ -9,6 +9,7 @@ namespace snl::detail {
 
 std::unique_ptr<Algorithm> make_relaxation(LocalizationProblem& prob, const SolverOptions& opt);  // relaxation.cpp
 std::unique_ptr<Algorithm> make_mm(LocalizationProblem& prob, const SolverOptions& opt);          // mm.cpp
+std::unique_ptr<Algorithm> make_ml_agd(LocalizationProblem& prob, const SolverOptions& opt);      // relaxation.cpp
 std::unique_ptr<Algorithm> make_mm_accel(LocalizationProblem& prob, const SolverOptions& opt);    // mm_accel.cpp
 std::unique_ptr<Algorithm> make_bb(LocalizationProblem& prob, const SolverOptions& opt);          // bb.cpp
 std::unique_ptr<Algorithm> make_pm(LocalizationProblem& prob, const SolverOptions& opt);          // pm.cpp

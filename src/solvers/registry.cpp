@@ -19,12 +19,22 @@ const std::vector<AlgorithmInfo> kRegistry = {
     // id             name           code  factory                   phases
     //   synchronous temporal_blocking gradient_stop consensus_rounds monotone_surrogate gap_certificate
     //   measurement_model
+    // The default: the distance-vector start (dv_start.hpp), --smooth-iter
+    // relaxation iterations, --settle-iter of mm-accel, then ml-agd to
+    // convergence (under weights or Huber, mm-accel to convergence instead).
+    // Its relaxation is a smoother, not solved: no gap certificate.
+    {A::kDvPipeline, "dv-pipeline", -1, nullptr, {A::kRelaxation, A::kMMAccel, A::kMlAgd},
+     true, false, false, false, true, false, true},
     {A::kRelaxation, "relaxation", 0, detail::make_relaxation, {A::kRelaxation},
      true, true, true, false, false, true, true},
     {A::kMM, "mm", 1, detail::make_mm, {A::kMM},
      true, true, false, false, true, false, true},
     {A::kMMAccel, "mm-accel", 6, detail::make_mm_accel, {A::kMMAccel},
      true, false, false, false, true, false, true},
+    // Nesterov's accelerated gradient on the ML cost with gradient restarts
+    // (relaxation.cpp): the unweighted l2 cost only.
+    {A::kMlAgd, "ml-agd", 13, detail::make_ml_agd, {A::kMlAgd},
+     true, false, false, false, false, false, false},
     {A::kPipeline, "pipeline", -1, nullptr, {A::kRelaxation, A::kMM},
      true, true, true, false, true, true, true},
     {A::kBB, "bb", 2, detail::make_bb, {A::kBB},

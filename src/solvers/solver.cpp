@@ -30,6 +30,8 @@ std::string SolverOptions::validate() const {
   if (!find_algorithm(algorithm))
     return "unknown --algorithm '" + algorithm + "' (expected " + algorithm_names(", ", " or ") + ")";
   if (max_iter < 0) return "--max-iter must be >= 0";
+  if (smooth_iter < 0) return "--smooth-iter must be >= 0";
+  if (settle_iter < 0) return "--settle-iter must be >= 0";
   if (tol && (!(*tol >= 0) || !std::isfinite(*tol))) return "--tol must be a finite number >= 0";
   if (!(grad_tol >= 0) || !std::isfinite(grad_tol)) return "--grad-tol must be a finite number >= 0";
   if (history_every < 0) return "--history-every must be >= 0";
@@ -55,8 +57,9 @@ namespace {
 // pipeline whose refinement ignores the model must not claim it).
 bool honours_model(const AlgorithmInfo& a, const SolverOptions& o) {
   if (!a.measurement_model) return false;
-  for (AlgorithmId id : o.phases())
-    if (!algorithm_info(id).measurement_model) return false;
+  for (AlgorithmId id : o.phases())  // dv-pipeline drops ml-agd under a model (Run::Run)
+    if (!algorithm_info(id).measurement_model && !(a.id == AlgorithmId::kDvPipeline && id == AlgorithmId::kMlAgd))
+      return false;
   return true;
 }
 
@@ -91,10 +94,24 @@ std::string SolverOptions::unsupported_option() const {
     if (c.set && !(c.capability == &AlgorithmInfo::measurement_model ? honours_model(*a, *this) : a->*c.capability))
       return std::string(c.option) + " is not honoured by --algorithm " + algorithm + " (only by " +
              algorithms_with(c.capability) + "); leave it out or give its default " + c.default_value;
+  if (smooth_iter != defaults.smooth_iter && a->id != AlgorithmId::kDvPipeline)
+    return "--smooth-iter is not honoured by --algorithm " + algorithm +
+           " (only by dv-pipeline); leave it out or give its default " + std::to_string(defaults.smooth_iter);
+  if (settle_iter != defaults.settle_iter && a->id != AlgorithmId::kDvPipeline)
+    return "--settle-iter is not honoured by --algorithm " + algorithm +
+           " (only by dv-pipeline); leave it out or give its default " + std::to_string(defaults.settle_iter);
   if (refine != defaults.refine && a->id != AlgorithmId::kPipeline)
     return "--refine is not honoured by --algorithm " + algorithm + " (only by pipeline); leave it out or give its default " +
            defaults.refine;
   return "";
+}
+
+std::int64_t SolverOptions::phase_max_iter(std::size_t index, std::size_t count) const {
+  const AlgorithmInfo* a = find_algorithm(algorithm);
+  if (!a || a->id != AlgorithmId::kDvPipeline) return max_iter;
+  if (index == 0) return std::min(max_iter, smooth_iter);
+  if (index + 1 < count) return std::min(max_iter, settle_iter);
+  return max_iter;
 }
 
 SolverOptions SolverOptions::resolved() const {
@@ -160,6 +177,7 @@ class Solver::Run {
     const AlgorithmInfo* info = nullptr;  // of this phase's method
     std::unique_ptr<Algorithm> alg;
     std::int64_t k = 0;         // iterations done in this phase
+    std::int64_t cap = 0;       // iterations this phase may run (SolverOptions::phase_max_iter)
     std::int64_t every = 1;     // record interval (the grown schedule: the grid records fall on)
     std::int64_t block = 1;     // iterations per pass at most
     std::int64_t stop_every = 1;  // --stop gradient: the test's (first) interval, a multiple of every
@@ -259,6 +277,8 @@ Solver::Run::Run(const Solver& s, const std::vector<double>& x0)
   sum_.algorithm = opt_.algorithm;
   sum_.ranks = comm_size(comm_);
   phases_ = opt_.phases();  // known: the options were validated
+  // dv-pipeline under weights or Huber: mm-accel to convergence (ml-agd is plain l2 only).
+  if (find_algorithm(opt_.algorithm)->id == AlgorithmId::kDvPipeline && prob_.model().active()) phases_.pop_back();
   xs_.assign(std::size_t(prob_.num_local()) * p_, 0.0);
   if (opt_.stop == "gradient") gs_.assign(std::size_t(prob_.num_owned()) * p_, 0.0);
   x_ = x0;
@@ -291,8 +311,9 @@ void Solver::Run::run_phases() {
       Phase ph;
       ph.index = i;
       ph.info = &algorithm_info(phases_[i]);
+      ph.cap = opt_.phase_max_iter(i, phases_.size());
       start_phase(ph);
-      while (ph.k < opt_.max_iter && pass(ph)) {
+      while (ph.k < ph.cap && pass(ph)) {
       }
       end_phase(ph);
     }
@@ -395,12 +416,12 @@ std::int64_t Solver::Run::test_interval(const Phase& ph) const {
 }
 
 bool Solver::Run::test_due(const Phase& ph) const {
-  return ph.k % test_interval(ph) == 0 || ph.k == opt_.max_iter;
+  return ph.k % test_interval(ph) == 0 || ph.k == ph.cap;
 }
 
 bool Solver::Run::record_due(const Phase& ph) const {
   const std::int64_t every = ph.record_tests > 0 ? test_interval(ph) * ph.record_tests : ph.every;
-  return ph.k % every == 0 || ph.k == opt_.max_iter;
+  return ph.k % every == 0 || ph.k == ph.cap;
 }
 
 bool Solver::Run::pass(Phase& ph) {
@@ -415,7 +436,7 @@ bool Solver::Run::pass(Phase& ph) {
   if (!r.finite) return stop(ph, TerminationType::kFailure, "non-finite iterate");
   const bool converged = test_stop(ph, r);
   if (opt_.check_monotone && ph.info->monotone_surrogate) check_monotone(ph);
-  const bool last = converged || ph.k == opt_.max_iter;
+  const bool last = converged || ph.k == ph.cap;
   const double t1 = MPI_Wtime();
   const bool abort = (record_due(ph) || last) && record(ph, r);
   ph.record_time += MPI_Wtime() - t1;
@@ -435,7 +456,7 @@ bool Solver::Run::pass(Phase& ph) {
 }
 
 std::int64_t Solver::Run::pass_length(const Phase& ph) const {
-  std::int64_t n = std::min({ph.block, opt_.max_iter - ph.k, ph.every - ph.k % ph.every});
+  std::int64_t n = std::min({ph.block, ph.cap - ph.k, ph.every - ph.k % ph.every});
   if (checkpointing_ && ckpt_.every > 0) n = std::min(n, ckpt_.every - ph.k % ckpt_.every);
   return n;
 }
@@ -565,7 +586,8 @@ double Solver::Run::relative_gradient(Phase& ph) {
   halo_.exchange(xs_.data(), p_);
   instrumentation_bytes_ += halo_.bytes_sent() - b0;
   const AlgorithmId id = ph.info->id;
-  const bool relaxed = !(id == AlgorithmId::kMM || id == AlgorithmId::kMMAccel || id == AlgorithmId::kBB);
+  const bool relaxed = !(id == AlgorithmId::kMM || id == AlgorithmId::kMMAccel || id == AlgorithmId::kBB ||
+                         id == AlgorithmId::kMlAgd);
   xs_ml_ = ml_cost_and_gradient(prob_, xs_.data(), gs_.data(), relaxed);
   xs_iteration_ = total_it_;
   detail::ExactSum g;
@@ -673,10 +695,12 @@ void Solver::Run::end_phase(Phase& ph) {
   double g = 0;
   MPI_Allreduce(&ph.time, &g, 1, MPI_DOUBLE, MPI_MAX, comm_);
   sum_.phase_iterate_seconds.emplace_back(ph.alg->name(), g);
-  if (ph.term == TerminationType::kNoConvergence) ph.msg = "reached --max-iter";
+  if (ph.term == TerminationType::kNoConvergence)
+    ph.msg = ph.cap < opt_.max_iter ? "ran its " + std::to_string(ph.cap) + " iterations (--smooth-iter, --settle-iter)"
+                                    : "reached --max-iter";
   const auto& xp = ph.alg->positions();
   std::copy(xp.begin(), xp.begin() + std::size_t(prob_.num_owned()) * p_, x_.begin());
-  if (ph.info->gap_certificate) {
+  if (ph.info->gap_certificate && find_algorithm(opt_.algorithm)->gap_certificate) {
     xs_iteration_ = -1;
     std::copy(x_.begin(), x_.end(), xs_.begin());
     const std::int64_t b1 = halo_.bytes_sent();

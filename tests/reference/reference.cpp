@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <queue>
 
 namespace snl::reference {
 
@@ -619,6 +621,177 @@ std::vector<double> model_async(const Network& net, const Model& m, const std::v
     }
     if (model_local_f(net, m, terms[i], x, z, g) <= f0)
       for (int c = 0; c < p; ++c) x[i * p + c] = z[c];
+  }
+  return x;
+}
+
+}  // namespace snl::reference
+
+namespace snl::reference {
+
+std::vector<std::vector<std::pair<double, int>>> nearest_anchor_paths(const Network& net, int k) {
+  const GlobalId n = net.num_sensors;
+  std::vector<std::vector<std::pair<GlobalId, double>>> adj(n);
+  for (std::size_t e = 0; e < net.sensor_ranges.size(); ++e) {
+    adj[net.sensor_edges[2 * e]].push_back({net.sensor_edges[2 * e + 1], net.sensor_ranges[e]});
+    adj[net.sensor_edges[2 * e + 1]].push_back({net.sensor_edges[2 * e], net.sensor_ranges[e]});
+  }
+  std::vector<std::vector<std::pair<double, int>>> all(n);
+  for (GlobalId a = 0; a < net.num_anchors(); ++a) {
+    // Dijkstra from anchor a: its measured sensors at their ranges.
+    std::vector<double> d(n, INFINITY);
+    using Item = std::pair<double, GlobalId>;
+    std::priority_queue<Item, std::vector<Item>, std::greater<Item>> q;
+    for (std::size_t e = 0; e < net.anchor_ranges.size(); ++e)
+      if (net.anchor_edges[2 * e + 1] == a && net.anchor_ranges[e] < d[net.anchor_edges[2 * e]]) {
+        d[net.anchor_edges[2 * e]] = net.anchor_ranges[e];
+        q.push({net.anchor_ranges[e], net.anchor_edges[2 * e]});
+      }
+    while (!q.empty()) {
+      const auto [du, u] = q.top();
+      q.pop();
+      if (du > d[u]) continue;
+      for (const auto& [v, w] : adj[u])
+        if (du + w < d[v]) {
+          d[v] = du + w;
+          q.push({d[v], v});
+        }
+    }
+    for (GlobalId i = 0; i < n; ++i)
+      if (std::isfinite(d[i])) all[i].push_back({d[i], int(a)});
+  }
+  for (auto& l : all) {
+    std::sort(l.begin(), l.end());
+    if (int(l.size()) > k) l.resize(k);
+  }
+  return all;
+}
+
+double path_correction(const Network& net, const std::vector<std::vector<std::pair<double, int>>>& lists) {
+  std::map<std::pair<int, int>, double> best;
+  for (std::size_t e = 0; e < net.anchor_ranges.size(); ++e) {
+    const GlobalId i = net.anchor_edges[2 * e];
+    const int a = int(net.anchor_edges[2 * e + 1]);
+    for (const auto& [D, b] : lists[i]) {
+      if (b == a) continue;
+      const auto key = std::make_pair(std::min(a, b), std::max(a, b));
+      const double path = net.anchor_ranges[e] + D;
+      auto it = best.find(key);
+      if (it == best.end() || path < it->second) best[key] = path;
+    }
+  }
+  long double straight = 0, path = 0;
+  for (const auto& [key, len] : best) {
+    straight += dist(&net.anchors[key.first * net.dim], &net.anchors[key.second * net.dim], net.dim);
+    path += len;
+  }
+  return path > 0 ? double(straight / path) : 1.0;
+}
+
+std::vector<double> dv_start(const Network& net, int k, const std::vector<double>& fallback) {
+  const int p = net.dim;
+  const auto lists = nearest_anchor_paths(net, k);
+  const double c = path_correction(net, lists);
+  std::vector<double> x = fallback;
+  for (GlobalId i = 0; i < net.num_sensors; ++i) {
+    const auto& l = lists[i];
+    if (l.empty()) continue;
+    std::vector<double> r, w;
+    double rmin = INFINITY, wsum = 0;
+    std::vector<double> xi(p, 0.0);
+    for (const auto& [D, a] : l) {
+      r.push_back(c * D);
+      w.push_back(1.0 / std::max(r.back() * r.back(), 1e-300));
+      rmin = std::min(rmin, r.back());
+      wsum += w.back();
+      for (int q = 0; q < p; ++q) xi[q] += w.back() * net.anchors[a * p + q];
+    }
+    for (int q = 0; q < p; ++q) xi[q] /= wsum;
+    for (int it = 0; it < 20; ++it) {
+      std::vector<double> H(p * p, 0.0), g(p, 0.0);
+      for (std::size_t t = 0; t < l.size(); ++t) {
+        const double* a = &net.anchors[l[t].second * p];
+        const double nz = dist(xi.data(), a, p);
+        if (!(nz > 0)) continue;
+        for (int u = 0; u < p; ++u) {
+          g[u] += w[t] * (nz - r[t]) * (xi[u] - a[u]) / nz;
+          for (int v = 0; v < p; ++v) H[u * p + v] += w[t] * (xi[u] - a[u]) / nz * ((xi[v] - a[v]) / nz);
+        }
+      }
+      double tr = 0;
+      for (int u = 0; u < p; ++u) tr += H[u * p + u];
+      if (!(tr > 0)) break;
+      for (int u = 0; u < p; ++u) H[u * p + u] += 0.1 * tr;
+      // Gauss-Jordan on the p x p system (independent of the solver's elimination).
+      std::vector<double> s = g;
+      for (int col = 0; col < p; ++col) {
+        int piv = col;
+        for (int row = col + 1; row < p; ++row)
+          if (std::fabs(H[row * p + col]) > std::fabs(H[piv * p + col])) piv = row;
+        for (int j = 0; j < p; ++j) std::swap(H[col * p + j], H[piv * p + j]);
+        std::swap(s[col], s[piv]);
+        for (int row = 0; row < p; ++row) {
+          if (row == col) continue;
+          const double f = H[row * p + col] / H[col * p + col];
+          for (int j = 0; j < p; ++j) H[row * p + j] -= f * H[col * p + j];
+          s[row] -= f * s[col];
+        }
+      }
+      double ns = 0;
+      for (int u = 0; u < p; ++u) {
+        s[u] /= H[u * p + u];
+        ns += s[u] * s[u];
+      }
+      ns = std::sqrt(ns);
+      const double scale = ns > 0.5 * rmin ? 0.5 * rmin / ns : 1.0;
+      for (int u = 0; u < p; ++u) xi[u] -= scale * s[u];
+    }
+    for (int q = 0; q < p; ++q) x[i * p + q] = xi[q];
+  }
+  return x;
+}
+
+std::vector<double> ml_agd(const Network& net, const std::vector<double>& x0, int iters) {
+  const int p = net.dim;
+  const double L = relaxation_lipschitz(net);
+  auto grad = [&](const std::vector<double>& x) {
+    std::vector<double> g(x.size(), 0.0);
+    for (std::size_t e = 0; e < net.sensor_ranges.size(); ++e) {
+      const GlobalId i = net.sensor_edges[2 * e], j = net.sensor_edges[2 * e + 1];
+      const double nz = dist(&x[i * p], &x[j * p], p);
+      if (!(nz > 0)) continue;
+      for (int c = 0; c < p; ++c) {
+        const double t = (1 - net.sensor_ranges[e] / nz) * (x[i * p + c] - x[j * p + c]);
+        g[i * p + c] += t;
+        g[j * p + c] -= t;
+      }
+    }
+    for (std::size_t e = 0; e < net.anchor_ranges.size(); ++e) {
+      const GlobalId i = net.anchor_edges[2 * e];
+      const double* a = &net.anchors[net.anchor_edges[2 * e + 1] * p];
+      const double nz = dist(&x[i * p], a, p);
+      if (!(nz > 0)) continue;
+      for (int c = 0; c < p; ++c) g[i * p + c] += (1 - net.anchor_ranges[e] / nz) * (x[i * p + c] - a[c]);
+    }
+    return g;
+  };
+  std::vector<double> x = x0, prev = x0;
+  std::int64_t k = 0;  // the momentum's iteration count since the last restart
+  for (int it = 0; it < iters; ++it) {
+    ++k;
+    const double beta = double(k - 2) / double(k + 1);  // w(k) = x(k-1) + (k-2)/(k+1) (x(k-1) - x(k-2))
+    std::vector<double> w(x.size());
+    for (std::size_t t = 0; t < x.size(); ++t) w[t] = x[t] + (k == 1 ? 0.0 : beta) * (x[t] - prev[t]);
+    const auto g = grad(w);
+    std::vector<double> xn(x.size());
+    double gd = 0;  // grad f(w) . (x(k) - x(k-1)), with grad f(w) / L = w - x(k)
+    for (std::size_t t = 0; t < x.size(); ++t) {
+      xn[t] = w[t] - g[t] / L;
+      gd += (w[t] - xn[t]) * (xn[t] - x[t]);
+    }
+    prev = x;
+    x = xn;
+    if (gd > 0) k = 1;  // restart: the next w is x(k) itself, then the momentum of a second iteration
   }
   return x;
 }

@@ -71,3 +71,23 @@ std::vector<double> model_async(const Network& net, const Model& m, const std::v
                                 std::uint64_t seed, bool exact);
 
 }  // namespace snl::reference
+
+namespace snl::reference {
+
+/// The distance-vector start's anchor lists: per sensor the k nearest anchors
+/// by shortest measured path (Dijkstra from every anchor over the sensor
+/// edges; anchors do not relay), as (distance, anchor id) ascending.
+std::vector<std::vector<std::pair<double, int>>> nearest_anchor_paths(const Network& net, int k);
+/// Sum of |a - b| over sum of the shortest a -> b path r_ia + D_ib, over the
+/// anchor pairs linked by a sensor i that measures a and lists b.
+double path_correction(const Network& net, const std::vector<std::vector<std::pair<double, int>>>& lists);
+/// The start: per sensor, min sum_t (|x - a_t| - c D_t)^2 / (c D_t)^2 from the weighted centroid by 20
+/// damped Gauss-Newton steps (0.1 tr(H) on the diagonal, steps at most half the shortest c D_t); sensors
+/// without a list keep their row of `fallback`.
+std::vector<double> dv_start(const Network& net, int k, const std::vector<double>& fallback);
+/// `iters` iterations of Nesterov's method on the ML cost f with step 1/L (L =
+/// 2 delta_max + max |A_i|) and the gradient restart: after x(k), when
+/// grad f(w(k)) . (x(k) - x(k-1)) > 0, the momentum starts again (ml-agd).
+std::vector<double> ml_agd(const Network& net, const std::vector<double>& x0, int iters);
+
+}  // namespace snl::reference

@@ -40,7 +40,8 @@ void run_info(const InfoCommand& cmd, MPI_Comm comm);
 struct SolveCommand {
   std::string network;
   std::string output;
-  std::string init = "random";  ///< "random" or a file with dataset `positions`
+  /// auto (dv for dv-pipeline, else random), random, dv (dv_start.hpp), or a file with dataset `positions`
+  std::string init = "auto";
   std::string json;
   std::string partition = "auto";  ///< bfs on one node, parmetis across nodes
   SolverOptions solver;

@@ -13,7 +13,7 @@ class Algorithm;
 class LocalizationProblem;
 struct SolverOptions;
 
-enum class AlgorithmId { kRelaxation, kMM, kPipeline, kBB, kPM, kAsync, kAsyncExact, kMMAccel, kSdp, kEsdp, kEdm, kBBCalafiore, kEsdpDist };
+enum class AlgorithmId { kRelaxation, kMM, kPipeline, kBB, kPM, kAsync, kAsyncExact, kMMAccel, kSdp, kEsdp, kEdm, kBBCalafiore, kEsdpDist, kDvPipeline, kMlAgd };
 
 struct AlgorithmInfo {
   AlgorithmId id;
@@ -56,6 +56,7 @@ std::string algorithms_with(bool AlgorithmInfo::*capability);
 
 /// Numeric codes of the algorithms in history/checkpoint/experiment files:
 /// 0=relaxation 1=mm 2=bb 3=pm 4=async 5=async-exact 6=mm-accel 7=sdp 8=esdp 10=bb-calafiore 11=edm 12=esdp-dist
+/// 13=ml-agd
 /// (9 for anything else).
 int algorithm_code(const std::string& name);
 const char* algorithm_name(int code);  ///< inverse of algorithm_code ("?" if unknown)

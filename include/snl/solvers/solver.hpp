@@ -31,10 +31,21 @@ enum class TerminationType {
 const char* to_string(TerminationType t);
 
 struct SolverOptions {
-  /// A name of the registry (registry.hpp): relaxation | mm | pipeline | bb | pm | async | async-exact
-  std::string algorithm = "pipeline";
-  /// Iterations per phase (the pipeline has two phases).
+  /// A name of the registry (registry.hpp): dv-pipeline | relaxation | mm | pipeline | bb | pm | async | ...
+  std::string algorithm = "dv-pipeline";
+  /// Iterations per phase (the pipelines have two phases).
   std::int64_t max_iter = 10000;
+  /// dv-pipeline: iterations of its relaxation phase, which smooths the
+  /// distance-vector start (outliers pulled in) before mm-accel; run much
+  /// longer, the relaxation draws sensors outside the anchors' hull onto it
+  /// and the refinement ends in folded local minima (docs/quality.md).
+  std::int64_t smooth_iter = 200;
+  /// dv-pipeline: iterations of its mm-accel phase before ml-agd takes over
+  /// (mm-accel's edge variables keep sensors from flipping while the basin is
+  /// settled; ml-agd then converges at a fifth of the cost per iteration).
+  std::int64_t settle_iter = 400;
+  /// Iterations the phase `index` of `count` run phases may run.
+  std::int64_t phase_max_iter(std::size_t index, std::size_t count) const;
   /// Tolerance of the stopping rule `stop` (0 disables it; unset: the rule's
   /// default, stop_tol()): with papers, the relative improvement
   /// ||x(k) - x(k-1)|| / ||x(k)|| at or below which a phase stops (003,
