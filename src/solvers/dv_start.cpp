@@ -46,6 +46,17 @@ struct List {
   }
 };
 
+// Bit t: entry t of l is not in `before` (a row: (id, distance) x k).
+std::uint16_t new_entries(const List& l, const double* before) {
+  std::uint16_t m = 0;
+  for (int t = 0; t < l.k && l.id[t] >= 0; ++t) {
+    bool seen = false;
+    for (int s = 0; s < l.k && !seen; ++s) seen = before[2 * s] == l.id[t] && before[2 * s + 1] == l.d[t];
+    if (!seen) m |= std::uint16_t(1u << t);
+  }
+  return m;
+}
+
 }  // namespace
 
 int dv_start_anchors(int dim) { return 3 * dim; }
@@ -66,18 +77,23 @@ AnchorPaths nearest_anchor_paths(LocalizationProblem& prob, int k) {
   }
   // rows: the lists as the previous round left them (a snapshot the round
   // reads, so that every list is updated from its neighbours' previous lists
-  // whichever rank owns them), with the flag "changed in the previous round".
-  // fresh: that flag per local node, in a byte array the neighbour loops read
-  // instead of the rows (most rows are not read in the later rounds).
-  std::vector<double> rows(std::size_t(nl) * w, 0.0);
-  std::vector<char> fresh(nl, 0), was(n, 1), next(n, 0);
-  std::fill(fresh.begin(), fresh.begin() + n, 1);
+  // whichever rank owns them), with a mask of the entries that are new since
+  // the round before: only those are offered (an entry offered once and
+  // refused stays refused, as lists only improve). fresh: that mask per local
+  // node, in a small array the neighbour loops read instead of the rows.
+  static_assert(sizeof(std::uint16_t) * 8 >= 9, "3p entries in 3D");
+  std::vector<double> rows(std::size_t(nl) * w, -1.0);  // ids -1: no entry
+  for (LocalId u = 0; u < nl; ++u) rows[std::size_t(u) * w + 2 * k] = 0;  // masks
+  std::vector<std::uint16_t> fresh(nl, 0), was(n, 0), next(n, 0);
+  for (LocalId v = 0; v < n; ++v)
+    for (int t = 0; t < k; ++t)
+      if (out.ids[std::size_t(v) * k + t] >= 0) fresh[v] |= std::uint16_t(1u << t);
   const auto& off = g.offsets();
   const auto& adj = g.adjacency();
   HaloPlan& halo = prob.graph().halo();
   for (;;) {
     for (LocalId v = 0; v < n; ++v) {
-      if (!fresh[v] && !was[v]) continue;  // the row holds this list, flag 0
+      if (!fresh[v] && !was[v]) continue;  // the row holds this list, mask 0
       double* r = &rows[std::size_t(v) * w];
       for (int t = 0; t < k; ++t) {
         r[2 * t] = out.ids[std::size_t(v) * k + t];
@@ -87,21 +103,23 @@ AnchorPaths nearest_anchor_paths(LocalizationProblem& prob, int k) {
     }
     halo.exchange(rows.data(), w);
     ++out.rounds;
-    for (LocalId u = n; u < nl; ++u) fresh[u] = rows[std::size_t(u) * w + 2 * k] != 0;
-    std::copy(fresh.begin(), fresh.begin() + n, was.begin());  // the flags the rows now hold
+    for (LocalId u = n; u < nl; ++u) fresh[u] = static_cast<std::uint16_t>(rows[std::size_t(u) * w + 2 * k]);
+    std::copy(fresh.begin(), fresh.begin() + n, was.begin());  // the masks the rows now hold
     std::int64_t moved = 0;
     for (LocalId v = 0; v < n; ++v) {
       List l{&out.ids[std::size_t(v) * k], &out.dist[std::size_t(v) * k], k};
       bool any = false;
       for (auto e = off[v]; e < off[v + 1]; ++e) {
         const LocalId u = adj[e];
-        if (!fresh[u]) continue;  // unchanged since it was last offered
+        const unsigned m = fresh[u];
+        if (!m) continue;  // nothing new since it was last offered
         const double* r = &rows[std::size_t(u) * w];
         const double dvu = g.edge_value(e);
-        for (int t = 0; t < k && r[2 * t] >= 0; ++t)
-          any |= l.offer(static_cast<std::int32_t>(r[2 * t]), r[2 * t + 1] + dvu);
+        for (int t = 0; t < k; ++t)
+          if (((m >> t) & 1u) && r[2 * t] >= 0) any |= l.offer(static_cast<std::int32_t>(r[2 * t]), r[2 * t + 1] + dvu);
       }
-      next[v] = any;  // not fresh[v]: later nodes of this round read the previous round's flags
+      // Not fresh[v]: later nodes of this round read the previous round's masks.
+      next[v] = any ? new_entries(l, &rows[std::size_t(v) * w]) : 0;
       moved += any;
     }
     std::copy(next.begin(), next.end(), fresh.begin());
