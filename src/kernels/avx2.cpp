@@ -114,8 +114,9 @@ SNL_AVX2 void relax_chunks_avx2(const LocalizationProblem& prob, const NodeLanes
     }
     __m256d X[P], N[P], D[P], WN[P];
     load_own<P>(s.x + i0, X);
+    const __m256d Dinv = s.inv_d ? load_scalars_0213(s.inv_d + v0) : _mm256_setzero_pd();
     for (int k = 0; k < P; ++k) {
-      N[k] = _mm256_sub_pd(W[k], _mm256_div_pd(A[k], vL));
+      N[k] = _mm256_sub_pd(W[k], s.inv_d ? _mm256_mul_pd(A[k], Dinv) : _mm256_div_pd(A[k], vL));
       D[k] = _mm256_sub_pd(N[k], X[k]);
       WN[k] = _mm256_add_pd(N[k], _mm256_mul_pd(vb, D[k]));
     }

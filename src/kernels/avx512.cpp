@@ -128,8 +128,9 @@ SNL_AVX512 void relax_chunks_avx512(const LocalizationProblem& prob, const NodeL
     }
     __m512d X[P], N[P], D[P], WN[P];
     load_own8<P>(s.x + i0, X);
+    const __m512d Dinv = s.inv_d ? load_lanes8(s.inv_d + v0) : _mm512_setzero_pd();
     for (int k = 0; k < P; ++k) {
-      N[k] = _mm512_sub_pd(W[k], _mm512_div_pd(A[k], vL));
+      N[k] = _mm512_sub_pd(W[k], s.inv_d ? _mm512_mul_pd(A[k], Dinv) : _mm512_div_pd(A[k], vL));
       D[k] = _mm512_sub_pd(N[k], X[k]);
       WN[k] = _mm512_add_pd(N[k], _mm512_mul_pd(vb, D[k]));
     }

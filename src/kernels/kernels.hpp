@@ -196,6 +196,9 @@ struct RelaxStep {
   /// The ML cost's gradient instead of f_hat's: every term (1 - rho/|z|) z
   /// with |z| > 0 (ml-agd, relaxation.cpp).
   bool ml = false;
+  /// Per owned node 1/D_v: x(k) = w - g * inv_d[v] instead of w - g/L
+  /// (ml-agd's diagonal majorizer).
+  const double* inv_d = nullptr;
 };
 void relax_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
                   const RelaxStep& s);

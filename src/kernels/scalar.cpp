@@ -29,7 +29,7 @@ void relax_chunk_scalar(const LocalizationProblem& prob, const NodeLanes& nl, st
     }
     if (aoff[v] != aoff[v + 1]) add_anchor_disk_terms(prob, v, s.w + i0, acc, s.ml);
     for (int k = 0; k < P; ++k) {
-      const double now = s.w[i0 + k] - acc[k] / s.L, d = now - s.x[i0 + k];
+      const double now = s.w[i0 + k] - (s.inv_d ? acc[k] * s.inv_d[v] : acc[k] / s.L), d = now - s.x[i0 + k];
       s.xn[i0 + k] = now;
       s.wn[i0 + k] = now + s.beta * d;
       s.norms[q] += d * d;

@@ -4,10 +4,11 @@
 // with temporal blocking, several iterations per pass over memory (kernels.hpp).
 //
 // The same loop on the ML cost f is ml-agd, dv-pipeline's last phase: Nesterov's
-// accelerated gradient with step 1/L (L = 2 delta_max + max |A_i| bounds f's
-// curvature from above: each edge term 1/2 |z|^2 - d |z| + d^2/2 is a quadratic
-// plus a concave function, so the descent lemma holds with the graph
-// Laplacian's bound) and the gradient restart of O'Donoghue & Candes (Found.
+// accelerated gradient with the step D^-1, D_v = 2 delta_v + |A_v| per node (f's
+// curvature is bounded above by the graph Laplacian plus the anchor terms: each
+// edge term 1/2 |z|^2 - d |z| + d^2/2 is a quadratic plus a concave function;
+// and the Laplacian is at most twice its diagonal, so the descent lemma holds
+// in D's norm), and the gradient restart of O'Donoghue & Candes (Found.
 // Comput. Math. 2015): when grad f(w(k)) . (x(k) - x(k-1)) > 0 the momentum
 // starts again from x(k). That sum is exact over the nodes, so the restarts,
 // like the iterates, are the same for any number of ranks. One kernel pass
@@ -51,6 +52,14 @@ class Relaxation final : public Algorithm {
     norms_.assign(std::size_t(levels_) * 3 * detail::kMaxLanes, 0.0);
     stream_ = detail::stream_rows(4 * sizeof(double) * x_.size());
     k_ = 0;
+    if (ml_) {  // 1 / (2 delta_v + |A_v|); 0 for a node with no terms (its gradient is 0)
+      inv_d_.assign(prob_.num_owned(), 0.0);
+      const auto& aoff = prob_.anchor_offsets();
+      for (LocalId v = 0; v < prob_.num_owned(); ++v) {
+        const double d = 2.0 * prob_.graph().degree(v) + double(aoff[v + 1] - aoff[v]);
+        inv_d_[v] = d > 0 ? 1.0 / d : 0.0;
+      }
+    }
   }
 
   void iterate() override { iterate_levels(1); }
@@ -82,7 +91,8 @@ class Relaxation final : public Algorithm {
       // x(k-2), which is no longer needed; w(k+1) = x(k) + beta_next (x(k) - x(k-1)).
       detail::relax_chunks(prob_, lanes_, c0, c1,
                            {w[j & 1], x[j & 1], x[(j + 1) & 1], w[(j + 1) & 1], L_, beta_next,
-                            &norms_[std::size_t(j) * 3 * detail::kMaxLanes], stream_ && j == n - 1, ml_});
+                            &norms_[std::size_t(j) * 3 * detail::kMaxLanes], stream_ && j == n - 1, ml_,
+                            ml_ ? inv_d_.data() : nullptr});
     });
     k_ += n;
     double sums[3];
@@ -161,8 +171,8 @@ class Relaxation final : public Algorithm {
 
  private:
   // ml-agd's restart test: grad f(w(k)) . (x(k) - x(k-1)) > 0, where
-  // grad f(w(k)) = L (w(k) - x(k)) (w(k) is in w_next_ after the swap), summed
-  // exactly per node (one collective).
+  // grad f(w(k))_v = D_v (w(k) - x(k))_v (w(k) is in w_next_ after the swap),
+  // summed exactly per node (one collective).
   bool restart_due() const {
     const int p = prob_.dim();
     detail::ExactSum s;
@@ -172,7 +182,7 @@ class Relaxation final : public Algorithm {
         const std::size_t i = std::size_t(v) * p + c;
         t += (w_next_[i] - x_[i]) * (x_[i] - prev_[i]);
       }
-      s.add(t);
+      if (inv_d_[v] > 0) s.add(t / inv_d_[v]);
     }
     detail::allreduce_exact(&s, 1, prob_.comm());
     return s.value() > 0;
@@ -186,6 +196,7 @@ class Relaxation final : public Algorithm {
   detail::LevelPlan plan_;
   std::vector<double> norms_;  // per level and lane: ||x(k) - x(k-1)||^2, ||x(k)||^2, ||g||^2
   std::vector<double> grad_;   // gradient_rows(), sized on first use
+  std::vector<double> inv_d_;  // ml-agd: 1 / D_v per owned node
   bool stream_ = false;        // non-temporal row stores (kernels.hpp)
   bool w_ready_ = false;
   bool ml_ = false;            // ml-agd: the ML cost's gradient, restarts

@@ -24,8 +24,8 @@ using snl::test::world_size;
 
 TEST(Determinism, BitIdenticalForOneTwoThreeRanks) {
   const Network w = make_network({.n = 120, .dim = 2, .radius = 0.2, .anchor_radius = 0.3, .sigma = 0.05});
-  for (const char* alg : {"relaxation", "mm", "mm-accel", "bb", "bb-calafiore", "pipeline", "pm", "async", "async-exact",
-                          "esdp-dist"}) {
+  for (const char* alg : {"relaxation", "mm", "mm-accel", "ml-agd", "dv-pipeline", "bb", "bb-calafiore", "pipeline",
+                          "pm", "async", "async-exact", "esdp-dist"}) {
     for (PartitionMethod pm : {PartitionMethod::kMetis, PartitionMethod::kBfs, PartitionMethod::kBlock}) {
       const auto ref = run(MPI_COMM_SELF, w, alg, 40, pm);
       {  // the portable scalar kernels give the same bits as the SIMD ones

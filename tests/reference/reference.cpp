@@ -753,7 +753,6 @@ std::vector<double> dv_start(const Network& net, int k, const std::vector<double
 
 std::vector<double> ml_agd(const Network& net, const std::vector<double>& x0, int iters) {
   const int p = net.dim;
-  const double L = relaxation_lipschitz(net);
   auto grad = [&](const std::vector<double>& x) {
     std::vector<double> g(x.size(), 0.0);
     for (std::size_t e = 0; e < net.sensor_ranges.size(); ++e) {
@@ -775,6 +774,16 @@ std::vector<double> ml_agd(const Network& net, const std::vector<double>& x0, in
     }
     return g;
   };
+  std::vector<double> dinv(net.num_sensors, 0.0);  // 1 / (2 delta_i + |A_i|)
+  {
+    const auto deg = degrees(net);
+    std::vector<int> an(net.num_sensors, 0);
+    for (std::size_t e = 0; e < net.anchor_ranges.size(); ++e) ++an[net.anchor_edges[2 * e]];
+    for (GlobalId i = 0; i < net.num_sensors; ++i) {
+      const double d = 2.0 * deg[i] + an[i];
+      dinv[i] = d > 0 ? 1.0 / d : 0.0;
+    }
+  }
   std::vector<double> x = x0, prev = x0;
   std::int64_t k = 0;  // the momentum's iteration count since the last restart
   for (int it = 0; it < iters; ++it) {
@@ -784,10 +793,15 @@ std::vector<double> ml_agd(const Network& net, const std::vector<double>& x0, in
     for (std::size_t t = 0; t < x.size(); ++t) w[t] = x[t] + (k == 1 ? 0.0 : beta) * (x[t] - prev[t]);
     const auto g = grad(w);
     std::vector<double> xn(x.size());
-    double gd = 0;  // grad f(w) . (x(k) - x(k-1)), with grad f(w) / L = w - x(k)
-    for (std::size_t t = 0; t < x.size(); ++t) {
-      xn[t] = w[t] - g[t] / L;
-      gd += (w[t] - xn[t]) * (xn[t] - x[t]);
+    double gd = 0;  // grad f(w) . (x(k) - x(k-1)), with grad f(w)_i = D_i (w - x(k))_i
+    for (GlobalId i = 0; i < net.num_sensors; ++i) {
+      double t = 0;
+      for (int c = 0; c < p; ++c) {
+        const std::size_t q = std::size_t(i) * p + c;
+        xn[q] = w[q] - g[q] * dinv[i];
+        t += (w[q] - xn[q]) * (xn[q] - x[q]);
+      }
+      if (dinv[i] > 0) gd += t / dinv[i];
     }
     prev = x;
     x = xn;

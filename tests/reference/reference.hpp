@@ -85,9 +85,9 @@ double path_correction(const Network& net, const std::vector<std::vector<std::pa
 /// damped Gauss-Newton steps (0.1 tr(H) on the diagonal, steps at most half the shortest c D_t); sensors
 /// without a list keep their row of `fallback`.
 std::vector<double> dv_start(const Network& net, int k, const std::vector<double>& fallback);
-/// `iters` iterations of Nesterov's method on the ML cost f with step 1/L (L =
-/// 2 delta_max + max |A_i|) and the gradient restart: after x(k), when
-/// grad f(w(k)) . (x(k) - x(k-1)) > 0, the momentum starts again (ml-agd).
+/// `iters` iterations of Nesterov's method on the ML cost f with the step 1/D_i
+/// per sensor (D_i = 2 delta_i + |A_i|) and the gradient restart: after x(k),
+/// when grad f(w(k)) . (x(k) - x(k-1)) > 0, the momentum starts again (ml-agd).
 std::vector<double> ml_agd(const Network& net, const std::vector<double>& x0, int iters);
 
 }  // namespace snl::reference
