@@ -7,7 +7,7 @@
 #
 # Methods (rows):
 #   default   `snl solve` with its defaults (dv-pipeline: distance-vector start,
-#             200 relaxation iterations, 400 of mm-accel, ml-agd to convergence);
+#             200 relaxation iterations, 200 of mm-accel, ml-agd to convergence);
 #   pipeline  the pipeline that was the default before: relaxation then mm-accel,
 #             from the random start (--algorithm pipeline);
 #   papers    003 + 000 as published: relaxation, then plain MM, papers' stopping

@@ -20,7 +20,7 @@ const std::vector<AlgorithmInfo> kRegistry = {
     //   synchronous temporal_blocking gradient_stop consensus_rounds monotone_surrogate gap_certificate
     //   measurement_model
     // The default: the distance-vector start (dv_start.hpp), --smooth-iter
-    // relaxation iterations, --settle-iter of mm-accel, then ml-agd to
+    // relaxation iterations, --settle-iter (200) of mm-accel, then ml-agd to
     // convergence (under weights or Huber, mm-accel to convergence instead).
     // Its relaxation is a smoother, not solved: no gap certificate.
     {A::kDvPipeline, "dv-pipeline", -1, nullptr, {A::kRelaxation, A::kMMAccel, A::kMlAgd},

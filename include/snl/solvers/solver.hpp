@@ -42,8 +42,10 @@ struct SolverOptions {
   std::int64_t smooth_iter = 200;
   /// dv-pipeline: iterations of its mm-accel phase before ml-agd takes over
   /// (mm-accel's edge variables keep sensors from flipping while the basin is
-  /// settled; ml-agd then converges at a fifth of the cost per iteration).
-  std::int64_t settle_iter = 400;
+  /// settled; ml-agd then converges at a quarter of the cost per iteration).
+  /// 400 ends within about 1e-5 of mm-accel run to convergence, 200 within
+  /// about 1e-4 in two thirds of the time (docs/quality.md, "dv-pipeline").
+  std::int64_t settle_iter = 200;
   /// Iterations the phase `index` of `count` run phases may run.
   std::int64_t phase_max_iter(std::size_t index, std::size_t count) const;
   /// Tolerance of the stopping rule `stop` (0 disables it; unset: the rule's
