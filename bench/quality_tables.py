@@ -7,12 +7,12 @@ from collections import defaultdict
 
 out = sys.argv[1]
 rows = list(csv.DictReader(open(f"{out}/benchmarks.csv")))
-print("| network | run | iterations (both phases) | termination | RMSE | RMSE (localizable) | weighted CRLB (localizable) | RMSE / CRLB |")
-print("|---|---|---|---|---|---|---|---|")
+print("| network | run | iterations (all phases) | termination | ML cost (the run's weights) | RMSE | RMSE (localizable) | weighted CRLB (localizable) | RMSE / CRLB |")
+print("|---|---|---|---|---|---|---|---|---|")
 for r in rows:
     rl, c = float(r["rmse_localizable"]), float(r["crlb_rmse_localizable"])
-    print(f"| {r['network']} | {r['run']} | {r['iterations']} | {r['termination']} | {float(r['rmse']):.5f} | "
-          f"{rl:.5f} | {c:.5f} ({r['localizable']} sensors) | {rl / c:.2f} |")
+    print(f"| {r['network']} | {r['run']} | {r['iterations']} | {r['termination']} | {float(r['ml_cost']):.6g} | "
+          f"{float(r['rmse']):.5f} | {rl:.5f} | {c:.5f} ({r['localizable']} sensors) | {rl / c:.2f} |")
 print()
 rows = list(csv.DictReader(open(f"{out}/nlos.csv")))
 acc = defaultdict(list)

@@ -4,16 +4,18 @@
 # tables of docs/quality.md to stdout.
 #   bench/quality_weights.sh [RANKS] [TRIALS]
 # Part 1: the two benchmark networks (multiplicative noise, nf = 0.1): the
-# default pipeline unweighted and weighted, against the weighted CRLB
+# default (dv-pipeline) and the pipeline (relaxation then mm-accel from the
+# random start), unweighted and weighted, against the weighted CRLB
 # (bench/quality_crlb.py, dense J^-1 over the localizable sensors).
 # Part 2: 1,000 sensors (average degree 10, the 4 corner anchors with link
 # radius 0.3, sigma 0.01) with 0/5/10/20% NLOS ranges (bias uniform in [0, 0.3]):
-# the pipeline with --loss l2 and huber:0.02, TRIALS networks (seeds 1..TRIALS).
+# the pipeline (--algorithm pipeline) with --loss l2 and huber:0.02, TRIALS
+# networks (seeds 1..TRIALS).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 NP=${1:-2}
 TRIALS=${2:-3}
-BENCH_DIR=${BENCH_DIR:-../shared/benchmarks}
+BENCH_DIR=${BENCH_DIR:-inputs/benchmarks}
 SNL=${SNL:-build/bin/snl}
 OUT=${OUT:-docs/data/quality}
 PY=/usr/bin/python3
@@ -33,12 +35,15 @@ for b in test10-500 test20-1000; do
   net="$BENCH_DIR/$b.h5"
   crlb=$($PY bench/quality_crlb.py "$net" 0.1)
   $PY bench/quality_add_sigmas.py "$net" "$T/sig.h5" 0.1
-  solve "$net" -o "$T/u.h5" --weights none --json "$T/r.json"
-  echo "$b,pipeline --weights none,$(field "$T/r.json" $KEYS),$crlb" >> "$OUT/benchmarks.csv"
-  solve "$net" -o "$T/r.h5" --weights multiplicative:0.1 --json "$T/r.json"
-  echo "$b,pipeline --weights multiplicative:0.1,$(field "$T/r.json" $KEYS),$crlb" >> "$OUT/benchmarks.csv"
-  solve "$T/sig.h5" -o "$T/r.h5" --weights file --json "$T/r.json"
-  echo "$b,pipeline --weights file (true sigmas),$(field "$T/r.json" $KEYS),$crlb" >> "$OUT/benchmarks.csv"
+  for alg in dv-pipeline pipeline; do
+    solve "$net" -o "$T/r.h5" --algorithm $alg --weights none --json "$T/r.json"
+    echo "$b,$alg --weights none,$(field "$T/r.json" $KEYS),$crlb" >> "$OUT/benchmarks.csv"
+    solve "$net" -o "$T/r.h5" --algorithm $alg --weights multiplicative:0.1 --json "$T/r.json"
+    echo "$b,$alg --weights multiplicative:0.1,$(field "$T/r.json" $KEYS),$crlb" >> "$OUT/benchmarks.csv"
+    solve "$T/sig.h5" -o "$T/r.h5" --algorithm $alg --weights file --json "$T/r.json"
+    echo "$b,$alg --weights file (true sigmas),$(field "$T/r.json" $KEYS),$crlb" >> "$OUT/benchmarks.csv"
+  done
+  solve "$net" -o "$T/u.h5" --algorithm pipeline --weights none -q
   solve "$T/sig.h5" -o "$T/r.h5" --weights file --algorithm mm --init "$T/u.h5" --json "$T/r.json"
   echo "$b,mm --weights file (true sigmas) from the unweighted pipeline,$(field "$T/r.json" $KEYS),$crlb" >> "$OUT/benchmarks.csv"
 done
@@ -49,7 +54,7 @@ for seed in $(seq 1 "$TRIALS"); do
     "$SNL" generate -q -o "$T/n.h5" --sensors 1000 --avg-degree 10 --anchors corners --anchor-radius 0.3 --sigma 0.01 --seed "$seed" \
       --nlos-fraction "$f" --nlos-bias 0.3 --localizable no
     for loss in l2 huber:0.02; do
-      solve "$T/n.h5" -o "$T/r.h5" --loss "$loss" --json "$T/r.json"
+      solve "$T/n.h5" -o "$T/r.h5" --algorithm pipeline --loss "$loss" --json "$T/r.json"
       echo "$seed,$f,$loss,$(field "$T/r.json" $KEYS)" >> "$OUT/nlos.csv"
     done
   done

@@ -114,10 +114,11 @@ int run_consensus_solve(const ConsensusSolveCommand& cmd, MPI_Comm comm) {
   if (!bad.empty()) throw Error(bad);
   if (cmd.checkpoint_every < 0) throw Error("--checkpoint-every must be >= 0");
   if (cmd.checkpoint_every > 0 && cmd.checkpoint.empty()) throw Error("--checkpoint-every needs --checkpoint FILE");
-  check_output_path(cmd.output, comm);
-  if (!cmd.json.empty()) check_output_path(cmd.json, comm);
+  check_output_path(cmd.output, comm, {{"the problem", cmd.problem}, {"--restart", cmd.restart}});
+  if (!cmd.json.empty())
+    check_output_path(cmd.json, comm, {{"the problem", cmd.problem}, {"--restart", cmd.restart}, {"the output", cmd.output}});
   if (!cmd.checkpoint.empty()) {
-    check_output_path(cmd.checkpoint, comm);
+    check_output_path(cmd.checkpoint, comm, {{"the problem", cmd.problem}, {"the output", cmd.output}, {"--json", cmd.json}});
     install_stop_signal_handlers();
   }
   const bool talk = comm_rank(comm) == 0 && !cmd.quiet;

@@ -223,6 +223,7 @@ std::string json_evaluation(const EvalCommand& cmd, const Evaluation& ev) {
 }  // namespace
 
 void run_eval(const EvalCommand& cmd, MPI_Comm comm) {
+  if (!cmd.json.empty()) check_output_path(cmd.json, comm, {{"the network", cmd.network}, {"the result", cmd.result}});
   Network slab = read_network(cmd.network, comm);
   if (slab.num_anchors() == 0) throw Error(cmd.network + ": the network has no anchors");
   Evaluation ev;

@@ -72,9 +72,12 @@ void check_experiment_command(const ExperimentCommand& cmd, MPI_Comm comm) {
       std::count(cmd.algorithms.begin(), cmd.algorithms.end(), algorithm_info(AlgorithmId::kRelaxation).name))
     throw Error("--algorithms relaxation needs --start random (with --start relaxation it is the starting point)");
   if (!(cmd.tol >= 0)) throw Error("--tol must be >= 0");
-  check_output_path(cmd.output, comm);
-  if (!cmd.trajectory.empty()) check_output_path(cmd.trajectory, comm);
-  if (!cmd.h5.empty()) check_output_path(cmd.h5, comm);
+  check_output_path(cmd.output, comm, {{"the network", cmd.network}});
+  if (!cmd.trajectory.empty())
+    check_output_path(cmd.trajectory, comm, {{"the network", cmd.network}, {"the output", cmd.output}});
+  if (!cmd.h5.empty())
+    check_output_path(cmd.h5, comm, {{"the network", cmd.network}, {"the output", cmd.output},
+                                     {"--trajectory", cmd.trajectory}});
 }
 
 std::unique_ptr<LocalizationProblem> load_geometry(const ExperimentCommand& cmd, MPI_Comm comm) {

@@ -67,7 +67,7 @@ std::string csv_text(const ResultFile& r, const std::vector<std::uint8_t>& flags
 void run_export(const ExportCommand& cmd, MPI_Comm comm) {
   if (cmd.index_base != 0 && cmd.index_base != 1)
     throw UsageError("--index-base must be 0 or 1, got " + std::to_string(cmd.index_base));
-  check_output_path(cmd.output, comm);
+  check_output_path(cmd.output, comm, {{"the result", cmd.result}, {"--network", cmd.network}});
   std::string text;
   collective_try(comm, [&] {
     if (!is_root(comm)) return;

@@ -68,7 +68,8 @@ void run_import(const ImportCommand& cmd, MPI_Comm comm) {
   opt.index_base = cmd.index_base;
   opt.sigma = cmd.sigma;
   if (const std::string bad = opt.validate(); !bad.empty()) throw UsageError(bad);
-  check_output_path(cmd.output, comm);
+  check_output_path(cmd.output, comm, {{"--sensor-edges", cmd.sensor_edges}, {"--anchor-edges", cmd.anchor_edges},
+                                      {"--anchors", cmd.anchors}, {"--truth", cmd.truth}});
   std::string text;
   collective_try(comm, [&] {
     if (!is_root(comm)) return;

@@ -1,6 +1,8 @@
 // Output files of the subcommands: the path checks made before any work, and
 // atomic writes (a temporary file renamed over the target on success only).
 #include <sys/stat.h>
+#include <climits>
+#include <cstdlib>
 #include <unistd.h>
 
 #include <cerrno>
@@ -66,7 +68,26 @@ void write_text_atomic(const std::string& path, const std::string& text) {
   }
 }
 
-void check_output_path(const std::string& path, MPI_Comm comm) {
+namespace {
+// Whether a and b name one file: the same inode where both exist, else the
+// same name in the same directory.
+bool same_file(const std::string& a, const std::string& b) {
+  struct stat sa {}, sb {};
+  const bool ea = stat(a.c_str(), &sa) == 0, eb = stat(b.c_str(), &sb) == 0;
+  if (ea && eb) return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+  if (ea != eb) return false;
+  auto canon = [](const std::string& p) {
+    const std::size_t slash = p.find_last_of('/');
+    const std::string dir = slash == std::string::npos ? "." : p.substr(0, slash + 1);
+    char buf[PATH_MAX];
+    const std::string d = realpath(dir.c_str(), buf) ? std::string(buf) : dir;
+    return d + "/" + (slash == std::string::npos ? p : p.substr(slash + 1));
+  };
+  return canon(a) == canon(b);
+}
+}  // namespace
+
+void check_output_path(const std::string& path, MPI_Comm comm, const std::vector<OtherFile>& others) {
   std::string err;
   if (detail::is_root(comm)) {
     const std::string d = dir_of(path);
@@ -81,6 +102,9 @@ void check_output_path(const std::string& path, MPI_Comm comm) {
     else if (struct stat st {}; stat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode))
       err = path + (S_ISDIR(st.st_mode) ? ": is a directory"
                                         : ": exists and is not a regular file (e.g. a device); refusing to replace it");
+    for (const auto& o : others)
+      if (err.empty() && !o.path.empty() && same_file(path, o.path))
+        err = path + ": names the same file as " + o.role + " (" + o.path + "); refusing to overwrite it";
   }
   agree(comm, err);
 }

@@ -82,13 +82,18 @@ PartitionMethod check_solve_command(const SolveCommand& cmd, MPI_Comm comm) {
   const std::string bad = cmd.solver.validate();
   if (!bad.empty()) throw Error(bad);
   const PartitionMethod pm = parse_partition_method(cmd.partition);
-  check_output_path(cmd.output, comm);
-  if (!cmd.json.empty()) check_output_path(cmd.json, comm);
+  const std::string init_file = cmd.init == "auto" || cmd.init == "random" || cmd.init == "dv" ? "" : cmd.init;
+  check_output_path(cmd.output, comm, {{"the network", cmd.network}, {"--init", init_file}, {"--restart", cmd.restart}});
+  if (!cmd.json.empty())
+    check_output_path(cmd.json, comm, {{"the network", cmd.network}, {"--init", init_file}, {"--restart", cmd.restart},
+                                       {"the output", cmd.output}});
   if (cmd.checkpoint_every < 0 || !(cmd.checkpoint_seconds >= 0))
     throw Error("--checkpoint-every and --checkpoint-seconds must be >= 0");
   if ((cmd.checkpoint_every > 0 || cmd.checkpoint_seconds > 0) && cmd.checkpoint.empty())
     throw Error("--checkpoint-every/--checkpoint-seconds need --checkpoint FILE");
-  if (!cmd.checkpoint.empty()) check_output_path(cmd.checkpoint, comm);
+  if (!cmd.checkpoint.empty())  // --restart may name it: the run resumes from it and replaces it
+    check_output_path(cmd.checkpoint, comm, {{"the network", cmd.network}, {"--init", init_file},
+                                             {"the output", cmd.output}, {"--json", cmd.json}});
   return pm;
 }
 

@@ -416,6 +416,10 @@ std::int64_t Solver::Run::test_interval(const Phase& ph) const {
 }
 
 bool Solver::Run::test_due(const Phase& ph) const {
+  // A phase capped below --max-iter (dv-pipeline's smoothing and settling)
+  // runs its iterations: its stopping rule could only end it early, and its
+  // tests would cost more than they save.
+  if (ph.cap < opt_.max_iter) return false;
   return ph.k % test_interval(ph) == 0 || ph.k == ph.cap;
 }
 

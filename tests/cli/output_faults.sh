@@ -112,4 +112,23 @@ if [ "$(id -u)" -eq 0 ] && mount -t tmpfs -o size=1m tmpfs "$MNT" 2>/dev/null; t
 else
   echo "skipped: disk-full cases (need root and a tmpfs mount)"
 fi
+# 5. An output naming an input file (or another output), by the same path or
+#    another name of the same file: refused before anything is read, the input
+#    intact (it was overwritten and the run exited 0, issue 46).
+cp "$T/net.h5" "$T/in.h5"
+ln -s "$T/in.h5" "$T/in_link.h5"
+"$SNL" solve "$T/in.h5" -o "$T/res.h5" "${SOLVE[@]}"
+expect_fail solve_output_is_network "$T/in.h5" "$T" -- solve "$T/in.h5" -o "$T/in.h5" "${SOLVE[@]}"
+expect_fail solve_output_is_network_link "$T/in.h5" "$T" -- solve "$T/in.h5" -o "$T/in_link.h5" "${SOLVE[@]}"
+expect_fail solve_output_is_init "$T/res.h5" "$T" -- solve "$T/in.h5" -o "$T/res.h5" --init "$T/res.h5" "${SOLVE[@]}"
+expect_fail solve_json_is_network "$T/in.h5" "$T" -- solve "$T/in.h5" -o "$T/r.h5" --json "$T/in.h5" "${SOLVE[@]}"
+expect_fail solve_json_is_output "$T/res.h5" "$T" -- solve "$T/in.h5" -o "$T/res.h5" --json "$T/res.h5" "${SOLVE[@]}"
+expect_fail solve_checkpoint_is_network "$T/in.h5" "$T" -- solve "$T/in.h5" -o "$T/r.h5" --checkpoint "$T/in.h5" \
+  --checkpoint-every 5 "${SOLVE[@]}"
+expect_fail export_output_is_result "$T/res.h5" "$T" -- export "$T/res.h5" -o "$T/res.h5"
+expect_fail eval_json_is_result "$T/res.h5" "$T" -- eval "$T/in.h5" "$T/res.h5" --json "$T/res.h5"
+"$SNL" consensus generate -o "$T/prob.h5" --nodes 30 -q
+expect_fail consensus_output_is_problem "$T/prob.h5" "$T" -- consensus solve "$T/prob.h5" -o "$T/prob.h5" -q
+expect_fail consensus_json_is_problem "$T/prob.h5" "$T" -- consensus solve "$T/prob.h5" -o "$T/c.h5" --json "$T/prob.h5" -q
+"$SNL" solve "$T/in.h5" -o "$T/in_copy_ok.h5" "${SOLVE[@]}" || fail "the network was damaged"
 echo "output_faults: $checked failing runs checked"

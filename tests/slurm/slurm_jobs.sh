@@ -57,7 +57,7 @@ same_positions() { h5diff "$1" "$2" /positions /positions > /dev/null || fail "$
 
 # ---- a) solve.sbatch on 2 tasks equals a direct 2-rank run.
 NET=$SRC/inputs/net50_s0.05.h5
-mpirun -np 2 "$SNL" solve "$NET" -o direct.h5 --algorithm pipeline --max-iter 3000 --tol 1e-6 -q
+mpirun -np 2 "$SNL" solve "$NET" -o direct.h5 --max-iter 3000 --tol 1e-6 -q  # the default, dv-pipeline, as the job
 for launcher in mpirun srun; do
   id=$(submit_wait 120 --ntasks=2 --time=5 -o "a_$launcher.log" \
     --export="ALL,SNL=$SNL,NET=$NET,OUT=$T/a_$launcher.h5,MAXITER=3000,TOL=1e-6,LAUNCHER=$launcher" \
@@ -120,7 +120,7 @@ mpirun -np 2 "$SNL" solve "$NET" -o ref.h5 --algorithm pipeline --max-iter "$MAX
   fail "reference run failed"
 step "b) uninterrupted reference run (--max-iter $MAXITER) done"
 id=$(submit_wait 900 --ntasks=2 --time=2 --signal=B:USR1@40 -o b.log \
-  --export="ALL,SNL=$SNL,NET=$NET,OUT=$T/b.h5,MAXITER=$MAXITER,TOL=0,SNL_TEST_ITERATION_DELAY=$DELAY" \
+  --export="ALL,SNL=$SNL,NET=$NET,OUT=$T/b.h5,ALG=pipeline,MAXITER=$MAXITER,TOL=0,SNL_TEST_ITERATION_DELAY=$DELAY" \
   "$SRC/jobs/solve.sbatch") || exit 1
 restarts=$(job_field "$id" Restarts)
 step "b) time-limited job $id finished after $restarts requeues"

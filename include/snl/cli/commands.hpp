@@ -123,8 +123,15 @@ struct ExportCommand {
 /// A result's positions as CSV. Collective.
 void run_export(const ExportCommand& cmd, MPI_Comm comm);
 
+/// A file a command reads or writes besides the output being checked: its role
+/// ("the network", "--json") and its path ("" = not given).
+struct OtherFile {
+  std::string role, path;
+};
 /// Checks on rank 0 that `path` can be created (its directory exists and is
-/// writable); every rank throws the same error otherwise.
-void check_output_path(const std::string& path, MPI_Comm comm);
+/// writable) and names none of `others` (the command's inputs and its other
+/// outputs: the same path, or the same file under another name); every rank
+/// throws the same error otherwise.
+void check_output_path(const std::string& path, MPI_Comm comm, const std::vector<OtherFile>& others = {});
 
 }  // namespace snl
