@@ -19,6 +19,13 @@
 
 namespace {
 
+// --seed: an unsigned 64-bit integer; a minus sign would wrap around silently.
+const CLI::Validator kSeed(
+    [](std::string& v) {
+      return v.find('-') != std::string::npos ? std::string("must be an integer >= 0, got " + v) : std::string();
+    },
+    "UINT >= 0");
+
 int fail(MPI_Comm comm, const std::string& msg, int status) {
   if (snl::comm_rank(comm) == 0) std::fprintf(stderr, "snl: error: %s\n", msg.c_str());
   return status;
@@ -73,7 +80,7 @@ void add_generate(CLI::App& app, Commands& c) {
       ->capture_default_str();
   g->add_option("--nlos-bias", c.gen.noise.nlos_bias, "NLOS bias uniform in [0, B]")->capture_default_str();
   g->add_option("--anchor-radius", c.gen.options.anchor_radius, "anchor link radius (default: sensor radius)");
-  g->add_option("--seed", c.gen.options.seed, "random seed")->capture_default_str();
+  g->add_option("--seed", c.gen.options.seed, "random seed")->check(kSeed)->capture_default_str();
   g->add_option("--localizable", c.localizable, "auto|yes|no: redraw until localizable (auto: n <= 20000)")
       ->capture_default_str();
   g->add_option("--max-draws", c.gen.options.max_draws, "redraw limit")->capture_default_str();
@@ -121,6 +128,7 @@ void add_solve(CLI::App& app, Commands& c) {
                 "dv-pipeline: mm-accel iterations before ml-agd (plain l2 model)")
       ->capture_default_str();
   s->add_option("--seed", c.solve.solver.seed, "seed of --init random and of the async activation clock")
+      ->check(kSeed)
       ->capture_default_str();
   s->add_option("--partition", c.solve.partition,
                 "auto|metis|bfs|parmetis|block (auto: bfs on one node, else parmetis; bfs: breadth-first "
@@ -202,7 +210,9 @@ void add_experiment(CLI::App& app, Commands& c) {
   x->add_option("--tol", c.experiment.tol, "methods' relative-improvement tolerance (0: whole budget)")->capture_default_str();
   x->add_option("--reach-rel", c.experiment.reach_rel, "relative margin for 'reached the best final cost'")
       ->capture_default_str();
-  x->add_option("--seed", c.experiment.seed, "seed of the noise draws and starts")->capture_default_str();
+  x->add_option("--seed", c.experiment.seed, "seed of the noise draws and starts")
+      ->check(kSeed)
+      ->capture_default_str();
   x->add_option("--partition", c.experiment.partition, "auto|metis|bfs|parmetis|block")->capture_default_str();
   x->add_flag("-q,--quiet", c.experiment.quiet, "no progress output");
 }
@@ -325,7 +335,7 @@ int consensus_generate_main(const std::vector<std::string>& args, MPI_Comm comm)
   app.add_option("--family", family, "exp|quadratic|logistic")->capture_default_str();
   app.add_option("--dim", cmd.options.dim, "size q of x (1 for exp)")->capture_default_str();
   app.add_flag("--hamiltonian", cmd.options.hamiltonian, "plant a Hamilton path (stored in truth_path)");
-  app.add_option("--seed", cmd.options.seed, "random seed")->capture_default_str();
+  app.add_option("--seed", cmd.options.seed, "random seed")->check(kSeed)->capture_default_str();
   app.add_option("--samples-per-node", cmd.options.samples_per_node, "logistic: samples owned by each node")
       ->capture_default_str();
   app.add_option("--lambda", cmd.options.lambda, "logistic: regularisation weight (> 0)")->capture_default_str();

@@ -51,7 +51,7 @@ for net in $NETS; do
         out="$WORK/r_${n}_${np}_${which}${rep}"
         # shellcheck disable=SC2086  # L_ENV is a list of VAR=value words
         /usr/bin/time -f "%e" -o "$out.time" env ${!ev:-} mpirun -np "$np" --oversubscribe "$bin" solve "$net" -o "$out.h5" \
-          --partition "${!pv:-${PARTITION:-metis}}" --max-iter "${ITERS:-1}" --tol 0 --refine "${REFINE:-mm}" -q --json "$out.json"
+          --partition "${!pv:-${PARTITION:-metis}}" --max-iter "${ITERS:-1}" --tol 0 --algorithm pipeline --refine "${REFINE:-mm}" -q --json "$out.json"
         [ -n "$ref" ] || ref="$out.h5"
         $PY - "$out" "$ref" "$n" "$np" "$which" "$rep" "$(cat "$out.time")" "$(cut -d' ' -f1 /proc/loadavg)" "$rec" <<'PYEOF'
 import json, sys, h5py

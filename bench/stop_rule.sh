@@ -17,7 +17,7 @@ mkdir -p "$OUT"
 T=$(mktemp -d); trap 'rm -rf "$T"' EXIT
 for net in "$@"; do
   name=$(basename "$net" .h5)
-  s() { local tag=$1; shift; mpirun -np "$NP" "$SNL" solve "$net" -o "$T/r.h5" -q --json "$OUT/$name.$tag.json" "$@"; }
+  s() { local tag=$1; shift; mpirun -np "$NP" "$SNL" solve "$net" -o "$T/r.h5" -q --json "$OUT/$name.$tag.json" --algorithm pipeline "$@"; }
   # SKIP: tags already in OUT (a long network's runs can be made one at a time).
   for run in "gradient.mm-accel --stop gradient --refine mm-accel" \
              "reference --stop gradient --refine mm-accel --tol 1e-9 --max-iter 20000" \

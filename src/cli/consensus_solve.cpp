@@ -112,8 +112,8 @@ std::string json_summary(const consensus::SolveSummary& s) {
 int run_consensus_solve(const ConsensusSolveCommand& cmd, MPI_Comm comm) {
   const std::string bad = cmd.solver.validate();
   if (!bad.empty()) throw Error(bad);
-  if (cmd.checkpoint_every < 0) throw Error("--checkpoint-every must be >= 0");
-  if (cmd.checkpoint_every > 0 && cmd.checkpoint.empty()) throw Error("--checkpoint-every needs --checkpoint FILE");
+  if (cmd.checkpoint_every < 0) throw UsageError("--checkpoint-every must be >= 0");
+  if (cmd.checkpoint_every > 0 && cmd.checkpoint.empty()) throw UsageError("--checkpoint-every needs --checkpoint FILE");
   check_output_path(cmd.output, comm, {{"the problem", cmd.problem}, {"--restart", cmd.restart}});
   if (!cmd.json.empty())
     check_output_path(cmd.json, comm, {{"the problem", cmd.problem}, {"--restart", cmd.restart}, {"the output", cmd.output}});

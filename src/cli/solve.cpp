@@ -88,9 +88,9 @@ PartitionMethod check_solve_command(const SolveCommand& cmd, MPI_Comm comm) {
     check_output_path(cmd.json, comm, {{"the network", cmd.network}, {"--init", init_file}, {"--restart", cmd.restart},
                                        {"the output", cmd.output}});
   if (cmd.checkpoint_every < 0 || !(cmd.checkpoint_seconds >= 0))
-    throw Error("--checkpoint-every and --checkpoint-seconds must be >= 0");
+    throw UsageError("--checkpoint-every and --checkpoint-seconds must be >= 0");
   if ((cmd.checkpoint_every > 0 || cmd.checkpoint_seconds > 0) && cmd.checkpoint.empty())
-    throw Error("--checkpoint-every/--checkpoint-seconds need --checkpoint FILE");
+    throw UsageError("--checkpoint-every/--checkpoint-seconds need --checkpoint FILE");
   if (!cmd.checkpoint.empty())  // --restart may name it: the run resumes from it and replaces it
     check_output_path(cmd.checkpoint, comm, {{"the network", cmd.network}, {"--init", init_file},
                                              {"the output", cmd.output}, {"--json", cmd.json}});

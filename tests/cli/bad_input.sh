@@ -36,6 +36,17 @@ while read -r f; do
   case $name in corrupt_*|no_anchors) ;; *) [ $rc -ne 0 ] || fail "info accepted $name";; esac
 done < "$T/list"
 echo "bad_input: $n failing runs checked"
+# Usage errors (issue 46): exit status 2 and one message, the output untouched.
+for bad in "solve $T/net.h5 -o $T/keep.h5 --seed -1" "solve $T/net.h5 -o $T/keep.h5 --checkpoint-every 5" \
+           "generate -o $T/keep.h5 --sensors 10 --seed -1" "consensus generate -o $T/keep.h5 --nodes 10 --seed -1"; do
+  set +e
+  # shellcheck disable=SC2086
+  "$SNL" $bad -q > /dev/null 2> "$T/err"; rc=$?
+  set -e
+  [ $rc -eq 2 ] || { cat "$T/err"; fail "$bad: exit status $rc, not 2"; }
+  grep -q -- "--seed\|--checkpoint" "$T/err" || { cat "$T/err"; fail "$bad: the message does not name the option"; }
+  [ "$(md5sum < "$T/keep.h5")" = "$sum0" ] || fail "$bad: existing output was modified"
+done
 # Invalid solver options: one clear message, a non-zero exit, the output untouched.
 for bad in "--temporal-block 0" "--temporal-block 65" "--max-iter -1" "--test-every -1" "--test-every 20 --stop papers" \
            "--tol nan" "--tol -1" "--tol inf"; do
