@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # dv-pipeline's --settle-iter (the mm-accel iterations before ml-agd) against
-# the final ML cost, RMSE and time (docs/quality.md, "dv-pipeline"), on default
+# the final ML cost, RMSE and time (docs/dv-pipeline.md), on default
 # networks (`snl generate --sensors N --seed S`); 1000000 settles to
 # convergence (mm-accel's stopping rule ends the run; ml-agd then stops at once).
 # A last row per network: ml-agd started at the true positions, the local

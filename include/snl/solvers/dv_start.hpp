@@ -8,8 +8,7 @@
 // makes them shorter than the truth), and each sensor places itself by
 // least-squares multilateration against those anchors. The start is a few
 // tenths of a link radius from the truth and, unlike the random start, places
-// sensors outside the anchors' hull on the side they are (docs/quality.md,
-// "The distance-vector start").
+// sensors outside the anchors' hull on the side they are (docs/dv-pipeline.md).
 #include <cstdint>
 #include <vector>
 

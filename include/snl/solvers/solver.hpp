@@ -44,7 +44,7 @@ struct SolverOptions {
   /// (mm-accel's edge variables keep sensors from flipping while the basin is
   /// settled; ml-agd then converges at a quarter of the cost per iteration).
   /// 400 ends within about 1e-5 of mm-accel run to convergence, 200 within
-  /// about 1e-4 in two thirds of the time (docs/quality.md, "dv-pipeline").
+  /// about 1e-4 in two thirds of the time (docs/dv-pipeline.md).
   std::int64_t settle_iter = 200;
   /// Iterations the phase `index` of `count` run phases may run.
   std::int64_t phase_max_iter(std::size_t index, std::size_t count) const;
