@@ -64,6 +64,16 @@ struct LoadedProblem {
   double t_read = 0, t_setup = 0;  // MPI_Wtime() after reading, after setting up
 };
 
+// What the run starts from: "restart" (a checkpoint), "dv", "random" (--init
+// auto resolved: dv for dv-pipeline, else random) or "file" (--init FILE).
+std::string start_kind(const SolveCommand& cmd) {
+  if (!cmd.restart.empty()) return "restart";
+  if (cmd.init == "dv" || cmd.init == "random") return cmd.init;
+  if (cmd.init != "auto") return "file";
+  const AlgorithmInfo* a = find_algorithm(cmd.solver.algorithm);
+  return a && a->id == AlgorithmId::kDvPipeline ? "dv" : "random";
+}
+
 // Before any work: options the algorithm cannot honour (a usage error), then
 // the other options and every output path. Nothing is read or written yet.
 PartitionMethod check_solve_command(const SolveCommand& cmd, MPI_Comm comm) {
@@ -164,20 +174,14 @@ LoadedProblem load_problem(const SolveCommand& cmd, PartitionMethod pm, bool tal
   return lp;
 }
 
-// --init auto resolved: dv for dv-pipeline, else random.
-std::string resolved_init(const SolveCommand& cmd) {
-  if (cmd.init != "auto") return cmd.init;
-  const AlgorithmInfo* a = find_algorithm(cmd.solver.algorithm);
-  return a && a->id == AlgorithmId::kDvPipeline ? "dv" : "random";
-}
 
 // --init random or dv, a positions file, or (with --restart) a placeholder the checkpoint replaces.
 std::vector<double> initial_positions(const SolveCommand& cmd, LocalizationProblem& prob, DvStartReport* dv,
                                       bool talk, MPI_Comm comm) {
-  if (!cmd.restart.empty()) return std::vector<double>(std::size_t(prob.num_owned()) * prob.dim(), 0.0);
-  const std::string init = resolved_init(cmd);
-  if (init == "random") return random_initial_positions(prob, cmd.solver.seed);
-  if (init == "dv") {
+  const std::string start = start_kind(cmd);
+  if (start == "restart") return std::vector<double>(std::size_t(prob.num_owned()) * prob.dim(), 0.0);
+  if (start == "random") return random_initial_positions(prob, cmd.solver.seed);
+  if (start == "dv") {
     std::vector<double> x = dv_initial_positions(prob, cmd.solver.seed, dv);
     if (talk)
       std::fprintf(stderr,
@@ -358,8 +362,8 @@ std::string json_summary(const SolveCommand& cmd, const LoadedProblem& lp, const
   for (const auto& ph : s.phase_iterate_seconds) j.add(ph.first + "_iterate_seconds", ph.second);
   for (const auto& ph : s.phase_traffic_bytes)
     if (std::isfinite(ph.second)) j.add(ph.first + "_traffic_bytes_per_iteration", ph.second);
-  j.add("start", cmd.restart.empty() ? (resolved_init(cmd) == "dv" || resolved_init(cmd) == "random" ? resolved_init(cmd) : "file") : "restart");
-  if (cmd.restart.empty() && resolved_init(cmd) == "dv")
+  j.add("start", start_kind(cmd));
+  if (start_kind(cmd) == "dv")
     j.add("start_seconds", dv.seconds)
         .add("start_rounds", dv.rounds)
         .add("start_correction", dv.correction)

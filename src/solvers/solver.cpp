@@ -57,9 +57,8 @@ namespace {
 // pipeline whose refinement ignores the model must not claim it).
 bool honours_model(const AlgorithmInfo& a, const SolverOptions& o) {
   if (!a.measurement_model) return false;
-  for (AlgorithmId id : o.phases())  // dv-pipeline drops ml-agd under a model (Run::Run)
-    if (!algorithm_info(id).measurement_model && !(a.id == AlgorithmId::kDvPipeline && id == AlgorithmId::kMlAgd))
-      return false;
+  for (AlgorithmId id : o.phases(true))  // the phases it runs under a model
+    if (!algorithm_info(id).measurement_model) return false;
   return true;
 }
 
@@ -121,12 +120,13 @@ SolverOptions SolverOptions::resolved() const {
   return o;
 }
 
-std::vector<AlgorithmId> SolverOptions::phases() const {
+std::vector<AlgorithmId> SolverOptions::phases(bool measurement_model) const {
   const AlgorithmInfo* a = find_algorithm(algorithm);
   if (!a) return {};
   std::vector<AlgorithmId> out = a->phases;
   const AlgorithmInfo* r = find_algorithm(resolved_refine());
   if (a->id == AlgorithmId::kPipeline && r) out.back() = r->id;
+  if (a->id == AlgorithmId::kDvPipeline && measurement_model) out.pop_back();
   return out;
 }
 
@@ -276,9 +276,7 @@ Solver::Run::Run(const Solver& s, const std::vector<double>& x0)
   halo_.reset_counters();
   sum_.algorithm = opt_.algorithm;
   sum_.ranks = comm_size(comm_);
-  phases_ = opt_.phases();  // known: the options were validated
-  // dv-pipeline under weights or Huber: mm-accel to convergence (ml-agd is plain l2 only).
-  if (find_algorithm(opt_.algorithm)->id == AlgorithmId::kDvPipeline && prob_.model().active()) phases_.pop_back();
+  phases_ = opt_.phases(prob_.model().active());  // known: the options were validated
   xs_.assign(std::size_t(prob_.num_local()) * p_, 0.0);
   if (opt_.stop == "gradient") gs_.assign(std::size_t(prob_.num_owned()) * p_, 0.0);
   x_ = x0;

@@ -112,8 +112,9 @@ struct SolverOptions {
   /// Loss on the range residuals: l2 | huber:DELTA.
   std::string loss = "l2";
   /// The phases the Solver runs: the algorithm's (registry), the pipeline's
-  /// refinement replaced by `refine`.
-  std::vector<AlgorithmId> phases() const;
+  /// refinement replaced by `refine`; under a measurement model (weights or
+  /// Huber) dv-pipeline ends with mm-accel, without ml-agd (plain l2 only).
+  std::vector<AlgorithmId> phases(bool measurement_model = false) const;
   /// "" if valid, else the message (unsupported_option() included).
   std::string validate() const;
   /// "" unless an option is set to a non-default value that the algorithm
