@@ -374,7 +374,8 @@ int consensus_solve_main(const std::vector<std::string>& args, MPI_Comm comm) {
   auto& o = cmd.solver;
   std::string dual;
   std::int64_t max_iter = 0, dual_max_iter = 0;
-  double tol = 0, dual_tol = 0, step = 0;
+  double tol = 0, dual_tol = 0, damping = 0;
+  std::string step;
   CLI::App app{"solve a consensus problem with a distributed method (run under mpirun)", "snl consensus solve"};
   app.add_option("problem", cmd.problem, "problem file (snl-consensus)")->required();
   app.add_option("-o,--output", cmd.output, "result file (snl-consensus-result)")->required();
@@ -388,7 +389,11 @@ int consensus_solve_main(const std::vector<std::string>& args, MPI_Comm comm) {
                                "running average's max error <= tol (default 0: run --max-iter)");
   auto* o_dtol = app.add_option("--dual-tol", dual_tol,
                                 "splitting: stop when max|w(t+1)-w(t)| <= dual-tol max|w(t+1)| (default 1e-12)");
-  auto* o_step = app.add_option("--step", step, "baselines: alpha0 of the step alpha0/sqrt(k+1) (default 0.1)");
+  auto* o_step = app.add_option("--step", step,
+                                "newton-tree, newton-path, central: armijo (default: backtracking on F, one "
+                                "convergecast of F per trial) or damped (b/(theta+1)); subgradient, incremental: "
+                                "a number alpha0 of the step alpha0/sqrt(k+1) (default 0.1)");
+  auto* o_damping = app.add_option("--damping", damping, "--step damped: b in (0, 1) (default 0.9)");
   app.add_option("--partition", o.partition, "metis|block")->capture_default_str();
   app.add_option("--json", cmd.json, "write a JSON summary");
   app.add_option("--checkpoint", cmd.checkpoint, "write checkpoints to this file (atomically replaced)");
@@ -404,7 +409,15 @@ int consensus_solve_main(const std::vector<std::string>& args, MPI_Comm comm) {
     if (o_dmax->count()) o.dual_max_iter = dual_max_iter;
     if (o_tol->count()) o.tol = tol;
     if (o_dtol->count()) o.dual_tol = dual_tol;
-    if (o_step->count()) o.step = step;
+    if (o_step->count()) {
+      char* end = nullptr;
+      const double a = std::strtod(step.c_str(), &end);
+      if (!step.empty() && end && *end == '\0')
+        o.step = a;
+      else
+        o.step_rule = step;
+    }
+    if (o_damping->count()) o.damping = damping;
     const std::string bad = o.validate();
     if (!bad.empty()) throw Error(bad);
   } catch (const CLI::CallForHelp&) {
@@ -439,11 +452,24 @@ int run_consensus(int argc, char** argv, MPI_Comm comm) {
   return guarded(comm, [&] {
     if (which == "generate") return snl::consensus_generate_main(rest, comm);
     if (which == "solve") return snl::consensus_solve_main(rest, comm);
-    const bool help = which.empty() || which == "--help" || which == "-h";
+    if (which == "--help" || which == "-h") {
+      if (root)
+        std::printf(
+            "snl consensus: distributed consensus optimisation, min_x sum_p f_p(x) over a network (seed 001;\n"
+            "docs/distributed-newton.md)\n\n"
+            "usage: snl consensus COMMAND [OPTIONS]\n\n"
+            "commands:\n"
+            "  generate  write a random problem (exp, quadratic or logistic family) to an HDF5 file\n"
+            "  solve     solve a problem file under mpirun: distributed Newton (newton-tree, newton-path),\n"
+            "            the baselines (subgradient, incremental) or central\n\n"
+            "each command's options: snl consensus COMMAND --help\n");
+      return 0;
+    }
     if (root)
-      std::fprintf(stderr, "usage: snl consensus generate|solve ... (see snl consensus solve --help)%s\n",
-                   help ? "" : ("; unknown '" + which + "'").c_str());
-    return which == "--help" || which == "-h" ? 0 : snl::kExitUsage;
+      std::fprintf(stderr, "snl: error: %s (see snl consensus --help)\n",
+                   which.empty() ? "a command is needed: snl consensus generate|solve ..."
+                                 : ("unknown consensus command '" + which + "'; expected generate or solve").c_str());
+    return snl::kExitUsage;
   });
 }
 

@@ -31,10 +31,11 @@ class Progress {
     if (r.elapsed - last_ < period_ && r.iteration != max_iter_ && r.iteration != 0) return;
     last_ = r.elapsed;
     // The baselines have no Newton decrement: n/a rather than nan.
-    char dec[32] = "n/a";
+    char dec[32] = "n/a", err[32] = "n/a";
     if (std::isfinite(r.decrement)) std::snprintf(dec, sizeof dec, "%.4e", r.decrement);
-    std::fprintf(stderr, "%10lld %10lld %16.10g %12.4e %12s %12.6g %8.1fs\n", static_cast<long long>(r.iteration),
-                 static_cast<long long>(r.dual_iterations), r.objective, r.max_abs_error, dec, r.messages, r.elapsed);
+    if (std::isfinite(r.max_abs_error)) std::snprintf(err, sizeof err, "%.4e", r.max_abs_error);
+    std::fprintf(stderr, "%10lld %10lld %16.10g %12s %12s %12.6g %8.1fs\n", static_cast<long long>(r.iteration),
+                 static_cast<long long>(r.dual_iterations), r.objective, err, dec, r.messages, r.elapsed);
   }
 
  private:
@@ -54,11 +55,15 @@ void write_consensus_result(const ConsensusSolveCommand& cmd, MPI_Comm comm, con
   f.set_attr("dim", std::int64_t{d.dim});
   f.set_attr("method", s.method);
   f.set_attr("dual", s.dual);
+  f.set_attr("step_rule", s.step_rule);
   f.set_attr("iterations", s.iterations);
+  f.set_attr("line_search_trials", s.line_search_trials);
   f.set_attr("dual_iterations", s.dual_iterations);
   f.set_attr("termination", s.termination);
   f.set_attr("converged", std::int64_t{s.converged ? 1 : 0});
   f.set_attr("x_star", s.x_star);
+  f.set_attr("x_star_converged", std::int64_t{s.x_star_converged ? 1 : 0});
+  f.set_attr("x_star_decrement", s.x_star_decrement);
   f.set_attr("max_abs_error", s.max_abs_error);
   f.set_attr("F", s.objective);
   f.set_attr("messages_per_node", s.messages_per_node);
@@ -76,6 +81,7 @@ void write_consensus_result(const ConsensusSolveCommand& cmd, MPI_Comm comm, con
   using R = consensus::HistoryRecord;
   column("iteration", [](const R& r) { return double(r.iteration); });
   column("dual_iterations", [](const R& r) { return double(r.dual_iterations); });
+  column("line_search_trials", [](const R& r) { return double(r.line_search_trials); });
   column("F", [](const R& r) { return r.objective; });
   column("max_abs_error", [](const R& r) { return r.max_abs_error; });
   column("messages_per_node", [](const R& r) { return r.messages; });
@@ -91,8 +97,10 @@ std::string json_summary(const consensus::SolveSummary& s) {
   JsonObject j;
   j.add("method", s.method)
       .add("dual", s.dual)
+      .add("step_rule", s.step_rule)
       .add("iterations", s.iterations)
       .add("dual_iterations", s.dual_iterations)
+      .add("line_search_trials", s.line_search_trials)
       .add("termination", s.termination)
       .add_bool("converged", s.converged)
       .add("max_abs_error", s.max_abs_error)
@@ -102,7 +110,10 @@ std::string json_summary(const consensus::SolveSummary& s) {
       .add("wall_seconds", s.wall_seconds)
       .add("ranks", s.ranks)
       .add("partition", s.partition)
-      .add("tree_depth", static_cast<std::int64_t>(s.tree_depth));
+      .add("tree_depth", static_cast<std::int64_t>(s.tree_depth))
+      .add_bool("x_star_converged", s.x_star_converged)
+      .add("x_star_iterations", s.x_star_iterations)
+      .add("x_star_decrement", s.x_star_decrement);
   for (std::size_t k = 0; k < s.x_star.size(); ++k) j.add("x_star_" + std::to_string(k), s.x_star[k]);
   return j.str();
 }
@@ -143,6 +154,12 @@ int run_consensus_solve(const ConsensusSolveCommand& cmd, MPI_Comm comm) {
   std::vector<double> x_rows;
   const consensus::SolveSummary s =
       consensus::solve(comm, data, cmd.solver, ck, [&](const consensus::HistoryRecord& r) { progress(r); }, &x_rows);
+  // Errors against an x* that is not the optimum would mislead: none is reported (NaN, null in JSON).
+  if (comm_rank(comm) == 0 && !s.x_star_converged)
+    std::fprintf(stderr,
+                 "snl: warning: the reference optimum x* did not converge (Newton decrement %.3e after %lld "
+                 "iterations); errors against x* are not reported\n",
+                 s.x_star_decrement, static_cast<long long>(s.x_star_iterations));
   if (s.termination == "SIGNAL") {
     if (talk) std::fprintf(stderr, "snl consensus solve: %s; resume with --restart %s\n", s.message.c_str(),
                            cmd.checkpoint.c_str());
@@ -161,12 +178,19 @@ int run_consensus_solve(const ConsensusSolveCommand& cmd, MPI_Comm comm) {
     agree(comm, err);
   }
   if (talk) {
+    char err[64];
+    if (s.x_star_converged)
+      std::snprintf(err, sizeof err, "%.3e", s.max_abs_error);
+    else
+      std::snprintf(err, sizeof err, "not known");
     std::fprintf(stderr,
-                 "snl consensus %s (dual %s): %s after %lld iterations (%lld dual)%s%s\n  max_p |x_p - x*| = %.3e, "
-                 "F(avg) = %.12g; per node %.6g messages, %.6g reals; %.3f s on %d ranks\n",
-                 s.method.c_str(), s.dual.c_str(), s.termination.c_str(), static_cast<long long>(s.iterations),
-                 static_cast<long long>(s.dual_iterations), s.message.empty() ? "" : ": ", s.message.c_str(),
-                 s.max_abs_error, s.objective, s.messages_per_node, s.reals_per_node, s.wall_seconds, s.ranks);
+                 "snl consensus %s (dual %s, step %s): %s after %lld iterations (%lld dual, %lld line-search "
+                 "trials)%s%s\n  max_p |x_p - x*| = %s, F(avg) = %.12g; per node %.6g messages, %.6g reals; "
+                 "%.3f s on %d ranks\n",
+                 s.method.c_str(), s.dual.c_str(), s.step_rule.c_str(), s.termination.c_str(),
+                 static_cast<long long>(s.iterations), static_cast<long long>(s.dual_iterations),
+                 static_cast<long long>(s.line_search_trials), s.message.empty() ? "" : ": ", s.message.c_str(), err,
+                 s.objective, s.messages_per_node, s.reals_per_node, s.wall_seconds, s.ranks);
   }
   return s.termination == "FAILURE" ? 4 : 0;
 }

@@ -1,7 +1,7 @@
-// `central`: the damped Newton method on F = sum_p f_p with the gradient and
-// Hessian summed over the nodes in node order (gathered to rank 0), so x* has
-// the same bits on any number of ranks. Every other method is measured
-// against the x* it gives (central_optimum).
+// `central`: Newton's method on F = sum_p f_p with the gradient and Hessian
+// summed over the nodes in node order (gathered to rank 0), so x* has the same
+// bits on any number of ranks; Armijo or damped steps (primal_step). Every
+// other method is measured against the x* of central_optimum.
 #include <algorithm>
 #include <cmath>
 
@@ -33,6 +33,7 @@ class Central final : public Runner {
     rows_.assign(ids.size() * (q + q * q), 0.0);
     sums_.assign(q + q * q, 0.0);
     dx_.assign(q, 0.0);
+    trial_.assign(q, 0.0);
     work_.assign(q * q, 0.0);
   }
 
@@ -55,8 +56,15 @@ class Central final : public Runner {
     const double t2 = quad_form(q, sums_.data() + q, dx_.data());
     theta_ = (t2 >= 0 && std::isfinite(t2)) ? std::sqrt(t2) : NAN;
     if (!std::isfinite(theta_)) return false;
-    step_ = theta_ < 0.25 ? 1.0 : opt_.damping / (theta_ + 1.0);
+    step_ = primal_step(opt_, theta_, c, [&](double t) {
+      for (int k = 0; k < q; ++k) trial_[k] = x_[k] + t * dx_[k];
+      c.add(double(n_ - 1), 1);  // F's terms to node 0
+      c.add(double(n_ - 1), 1);  // the verdict back
+      return objective_at(gather_, obj_, trial_.data());
+    });
+    if (!std::isfinite(step_)) return false;
     for (int k = 0; k < q; ++k) x_[k] += step_ * dx_[k];
+    f_ = NAN;
     return true;
   }
 
@@ -79,6 +87,10 @@ class Central final : public Runner {
   void set_x_rows(const std::vector<double>& all) override { std::copy(all.begin(), all.begin() + q_, x_.begin()); }
   const std::vector<double>& x() const { return x_; }
   double theta() const { return theta_; }
+  double objective() {  // F at x (collective)
+    if (std::isnan(f_)) f_ = objective_at(gather_, obj_, x_.data());
+    return f_;
+  }
 
   void save(H5File& f) const override {
     f.write_replicated("state/x", x_);
@@ -101,8 +113,8 @@ class Central final : public Runner {
   GlobalId n_;
   LocalObjectives obj_;
   NodeGather gather_;
-  std::vector<double> x_, rows_, sums_, dx_, work_;
-  double theta_ = NAN, step_ = 0;
+  std::vector<double> x_, rows_, sums_, dx_, trial_, work_;
+  double theta_ = NAN, step_ = 0, f_ = NAN;
 };
 
 }  // namespace
@@ -114,7 +126,7 @@ std::unique_ptr<Runner> make_central(MPI_Comm comm, const ProblemData& data, con
 
 }  // namespace detail
 
-std::vector<double> central_optimum(MPI_Comm comm, const ProblemData& data) {
+Optimum central_optimum(MPI_Comm comm, const ProblemData& data, std::int64_t max_iterations) {
   // Any partition gives the same bits (sums in node order): the block one.
   const int size = comm_size(comm);
   std::vector<int> owner(static_cast<std::size_t>(data.num_nodes));
@@ -124,18 +136,26 @@ std::vector<double> central_optimum(MPI_Comm comm, const ProblemData& data) {
     std::fill(owner.begin() + b, owner.begin() + e, r);
   }
   SolveOptions opt;
-  opt.method = "central";
+  opt.method = "central";  // Armijo steps
   detail::Central c(comm, data, opt, owner);
   detail::Counters unused;
+  Optimum o;
   double prev = INFINITY;
-  for (int k = 0; k < 200; ++k) {
-    if (!c.iterate(k, unused))
-      throw Error("central Newton method failed (a Hessian sum that is not positive definite, or overflow)");
+  for (std::int64_t k = 0; k < max_iterations; ++k) {
+    const bool ok = c.iterate(k, unused);
+    o.iterations = k + 1;
+    o.decrement = c.theta();
+    if (!ok) break;  // not converged: a Hessian sum that is not SPD, overflow, or no Armijo step
     const double t = c.theta();
-    if (t <= 1e-12 || (t < 1e-6 && t >= prev)) break;  // converged, or stagnating at rounding level
+    // theta < 1/4 took the full step; stagnation below 1e-8 (1 + |F|)^(1/2) is F's rounding level.
+    if (t <= 1e-12 || (t >= prev && t <= 1e-8 * std::sqrt(1.0 + std::fabs(c.objective())))) {
+      o.converged = true;
+      break;
+    }
     prev = t;
   }
-  return c.x();
+  o.x = c.x();
+  return o;
 }
 
 }  // namespace snl::consensus

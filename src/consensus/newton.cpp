@@ -7,8 +7,9 @@
 // Wei-Ozdaglar-Jadbabaie's matrix splitting M = A H^-1 A^T = D + B,
 //   w(t+1) = (D + Bbar)^-1 ((Bbar - B) w(t) + rhs) = w(t) + (D + Bbar)^-1 (rhs - M w(t)),
 // Bbar_ii = sum_j |B_ij| (a link only needs the links that share an end node),
-// or exactly by one leaf-to-root and one root-to-leaf sweep. Primal step damped
-// as in Wei-Ozdaglar-Jadbabaie: 1 if theta < 1/4, else b/(theta + 1).
+// or exactly by one leaf-to-root and one root-to-leaf sweep. Primal step by
+// Armijo backtracking on F = sum_p f_p(x_p), one convergecast of F per trial,
+// or damped as in Wei-Ozdaglar-Jadbabaie (primal_step, solver_detail.hpp).
 #include <algorithm>
 #include <cmath>
 
@@ -79,7 +80,8 @@ class Newton final : public Runner {
     }
     theta_ = decrement(c);
     if (!std::isfinite(theta_)) return false;
-    step_ = theta_ < 0.25 ? 1.0 : opt_.damping / (theta_ + 1.0);
+    step_ = primal_step(opt_, theta_, c, [&](double t) { return objective_along(t, c); });
+    if (!std::isfinite(step_)) return false;
     const LocalId no = tree_->num_owned();
     for (std::int64_t i = 0; i < std::int64_t(no) * q_; ++i) x_[i] += step_ * dx_[i];
     return true;
@@ -271,6 +273,27 @@ class Newton final : public Runner {
     return true;
   }
 
+  // F(x + t dx) = sum_p f_p(x_p + t dx_p) by a convergecast over the tree
+  // (children in global-id order) and a broadcast of the total.
+  double objective_along(double t, Counters& c) {
+    const int q = q_;
+    const LocalId no = tree_->num_owned();
+    for (LocalId v = 0; v < no; ++v) {
+      for (int k = 0; k < q; ++k) tmp_[k] = x_[std::size_t(v) * q + k] + t * dx_[std::size_t(v) * q + k];
+      one_[v] = obj_.value(v, tmp_.data());
+    }
+    return tree_total(c);
+  }
+
+  // The sum of one_ over the tree, on every rank: a convergecast and a broadcast.
+  double tree_total(Counters& c) {
+    tree_->up_sum(one_.data(), 1);
+    c.add(2 * double(n_ - 1), 1);
+    double total = tree_->root_local() >= 0 ? one_[tree_->root_local()] : 0.0;
+    MPI_Bcast(&total, 1, MPI_DOUBLE, tree_->root_rank(), comm_);
+    return total;
+  }
+
   // theta^2 = sum_p dx_p^T H_p dx_p by a convergecast over the tree (children
   // in global-id order: the same bits on any number of ranks), then a broadcast.
   double decrement(Counters& c) {
@@ -278,11 +301,7 @@ class Newton final : public Runner {
     const LocalId no = tree_->num_owned();
     for (LocalId v = 0; v < no; ++v)
       one_[v] = quad_form(q, &hess_[std::size_t(v) * qq], &dx_[std::size_t(v) * q]);
-    tree_->up_sum(one_.data(), 1);
-    const double links = double(n_ - 1);
-    c.add(2 * links, 1);  // the convergecast and the broadcast of the total
-    double t2 = tree_->root_local() >= 0 ? one_[tree_->root_local()] : 0.0;
-    MPI_Bcast(&t2, 1, MPI_DOUBLE, tree_->root_rank(), comm_);
+    const double t2 = tree_total(c);
     return (t2 >= 0 && std::isfinite(t2)) ? std::sqrt(t2) : NAN;
   }
 

@@ -41,6 +41,15 @@ const char* dual_name(DualSolver d) {
   return "?";
 }
 
+const char* step_rule_name(StepRule s) {
+  switch (s) {
+    case StepRule::kArmijo: return "armijo";
+    case StepRule::kDamped: return "damped";
+    case StepRule::kNone: return "none";
+  }
+  return "?";
+}
+
 Method SolveOptions::method_kind() const {
   for (const auto& k : kMethods)
     if (method == k.name) return k.m;
@@ -51,6 +60,13 @@ DualSolver SolveOptions::dual_kind() const {
   if (!is_newton(method_kind())) return DualSolver::kNone;
   return (dual && *dual == "exact") ? DualSolver::kExact : DualSolver::kSplitting;
 }
+
+StepRule SolveOptions::step_kind() const {
+  if (is_baseline(method_kind())) return StepRule::kNone;
+  return (step_rule && *step_rule == "damped") ? StepRule::kDamped : StepRule::kArmijo;
+}
+
+double SolveOptions::damping_b() const { return damping ? *damping : 0.9; }
 
 std::string SolveOptions::validate() const {
   if (std::none_of(std::begin(kMethods), std::end(kMethods), [&](const MethodName& k) { return method == k.name; }))
@@ -69,8 +85,16 @@ std::string SolveOptions::validate() const {
     return std::string(dual_max_iter ? "--dual-max-iter" : "--dual-tol") +
            " applies to the splitting dual of newton-tree and newton-path only, not to " + who +
            (is_newton(m) ? " --dual exact" : "");
-  if (step && !is_baseline(m)) return "--step applies to subgradient and incremental only, not to " + who;
-  if (!(damping > 0 && damping < 1)) return "the damping b must be in (0, 1)";
+  if (step && !is_baseline(m))
+    return "--step A (alpha0) applies to subgradient and incremental only; " + who + " takes --step armijo|damped";
+  if (step_rule && *step_rule != "armijo" && *step_rule != "damped")
+    return "unknown --step '" + *step_rule + "' (expected armijo, damped, or a number alpha0 for the baselines)";
+  if (step_rule && is_baseline(m))
+    return "--step " + *step_rule + " applies to newton-tree, newton-path and central; " + who +
+           " takes --step A (alpha0 of alpha0/sqrt(k+1))";
+  if (damping && !(*damping > 0 && *damping < 1)) return "--damping must be in (0, 1)";
+  if (damping && step_kind() != StepRule::kDamped)
+    return "--damping applies to --step damped only (" + who + " steps by " + step_rule_name(step_kind()) + ")";
   if (partition != "metis" && partition != "block") return "--partition must be metis or block";
   return "";
 }
@@ -90,7 +114,8 @@ std::string SolveOptions::checkpoint_key() const {
   if (dual_kind() == DualSolver::kSplitting)
     os << " dual_max_iter=" << dual_max_iterations() << " dual_tol=" << dual_tolerance();
   if (is_baseline(method_kind())) os << " step=" << step0();
-  os << " damping=" << damping;
+  os << " step_rule=" << step_rule_name(step_kind());
+  if (step_kind() == StepRule::kDamped) os << " damping=" << damping_b();
   return os.str();
 }
 

@@ -240,10 +240,43 @@ bool Adjacency::linked(GlobalId i, GlobalId j) const {
   return std::binary_search(col.begin() + offset[i], col.begin() + offset[i + 1], j);
 }
 
+// Finite values are not enough: f_p, its gradient and its Hessian at x = 0 must
+// be finite in double precision (quad_r = 1e200 squares to infinity), or every
+// method fails with nothing to say about the data.
+std::string check_finite_at_zero(const ProblemData& d) {
+  const int q = d.dim;
+  const std::vector<double> zero(q, 0.0);
+  std::vector<double> g(q), h(static_cast<std::size_t>(q) * q);
+  const char* data = d.family == Family::kExp ? "exp_a..exp_d" : d.family == Family::kQuadratic ? "quad_h, quad_r"
+                                                                                                  : "features";
+  const GlobalId chunk = 65536;  // the nodes' data copied a chunk at a time
+  LocalObjectives obj;
+  std::vector<GlobalId> ids;
+  for (GlobalId p = 0; p < d.num_nodes; ++p) {
+    if (p % chunk == 0) {
+      ids.clear();
+      for (GlobalId i = p; i < std::min(d.num_nodes, p + chunk); ++i) ids.push_back(i);
+      obj = LocalObjectives(d, ids);
+    }
+    const LocalId v = static_cast<LocalId>(p % chunk);
+    const double f = obj.value(v, zero.data());
+    obj.gradient(v, zero.data(), g.data());
+    obj.hessian(v, zero.data(), h.data());
+    bool ok = std::isfinite(f);
+    for (double v : g) ok = ok && std::isfinite(v);
+    for (double v : h) ok = ok && std::isfinite(v);
+    if (!ok)
+      return std::string(data) + ": node " + std::to_string(p) +
+             ": its f_p, gradient or Hessian at x = 0 overflows double precision (values too large; rescale the data)";
+  }
+  return "";
+}
+
 std::string check_problem(const ProblemData& d) {
   if (auto m = check_header(d); !m.empty()) return m;
   if (auto m = check_edges(d); !m.empty()) return m;
   if (auto m = check_family(d); !m.empty()) return m;
+  if (auto m = check_finite_at_zero(d); !m.empty()) return m;
   const Adjacency adj(d.num_nodes, d.edges);
   if (auto m = check_truth_path(d, adj); !m.empty()) return m;
   return check_connected(d, adj);

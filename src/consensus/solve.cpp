@@ -151,13 +151,15 @@ const Column kColumns[] = {{"max_abs_error", &HistoryRecord::max_abs_error},
                            {"step", &HistoryRecord::step}};
 
 void write_history(H5File& f, const std::vector<HistoryRecord>& h) {
-  std::vector<double> it, dit;
+  std::vector<double> it, dit, ls;
   for (const auto& r : h) {
     it.push_back(double(r.iteration));
     dit.push_back(double(r.dual_iterations));
+    ls.push_back(double(r.line_search_trials));
   }
   f.write_replicated("history/iteration", it);
   f.write_replicated("history/dual_iterations", dit);
+  f.write_replicated("history/line_search_trials", ls);
   for (const auto& col : kColumns) {
     std::vector<double> v;
     for (const auto& r : h) v.push_back(r.*(col.field));
@@ -169,10 +171,14 @@ std::vector<HistoryRecord> read_history(const H5File& f) {
   const auto len = f.shape("history/iteration").at(0);
   const auto it = f.read_rows_double("history/iteration", 0, len);
   const auto dit = f.read_rows_double("history/dual_iterations", 0, len);
+  if (f.shape("history/line_search_trials").at(0) != len)
+    throw Error(f.path() + ": checkpoint history columns differ in length");
+  const auto ls = f.read_rows_double("history/line_search_trials", 0, len);
   std::vector<HistoryRecord> h(len);
   for (std::size_t i = 0; i < len; ++i) {
     h[i].iteration = static_cast<std::int64_t>(it[i]);
     h[i].dual_iterations = static_cast<std::int64_t>(dit[i]);
+    h[i].line_search_trials = static_cast<std::int64_t>(ls[i]);
   }
   for (const auto& col : kColumns) {
     const std::string name = std::string("history/") + col.name;
@@ -192,6 +198,7 @@ void write_checkpoint(MPI_Comm comm, const std::string& path, const ProblemData&
   f.set_attr("options", opt.checkpoint_key());
   f.set_attr("iteration", k);
   f.set_attr("dual_iterations", c.dual_iterations);
+  f.set_attr("line_search_trials", c.line_search_trials);
   f.set_attr("messages_total", c.messages);
   f.set_attr("reals_total", c.reals);
   write_history(f, h);
@@ -215,6 +222,7 @@ std::int64_t read_checkpoint(MPI_Comm comm, const std::string& path, const Probl
   const std::int64_t k = f.attr_int("iteration");
   if (k < 0) throw Error(what + "checkpoint iteration out of range");
   c.dual_iterations = f.attr_int("dual_iterations");
+  c.line_search_trials = f.attr_int("line_search_trials");
   c.messages = f.attr_double("messages_total");
   c.reals = f.attr_double("reals_total");
   h = read_history(f);
@@ -229,6 +237,7 @@ void finish(SolveSummary& s, std::int64_t k, const Counters& c, double n, const 
             std::vector<double>* x_rows) {
   s.iterations = k;
   s.dual_iterations = c.dual_iterations;
+  s.line_search_trials = c.line_search_trials;
   s.max_abs_error = s.history.back().max_abs_error;
   s.objective = s.history.back().objective;
   s.messages_per_node = c.messages / n;
@@ -251,8 +260,16 @@ SolveSummary solve(MPI_Comm comm, const ProblemData& data, const SolveOptions& o
   SolveSummary s;
   s.method = opt.method;
   s.dual = dual_name(opt.dual_kind());
+  s.step_rule = step_rule_name(opt.step_kind());
   s.ranks = comm_size(comm);
-  s.x_star = central_optimum(comm, data);  // not counted: the reference of the errors
+  // Not counted: the reference of the errors, trusted only if it converged.
+  // SNL_TEST_REFERENCE_MAX_ITER: tests cap the reference to see an unconverged x* reported.
+  const char* cap = std::getenv("SNL_TEST_REFERENCE_MAX_ITER");
+  const Optimum ref = central_optimum(comm, data, cap ? std::atoll(cap) : 1000);
+  s.x_star = ref.x;
+  s.x_star_converged = ref.converged;
+  s.x_star_iterations = ref.iterations;
+  s.x_star_decrement = ref.decrement;
   Counters c;
   Built b;
   abort_on_local_failure(comm, "setup", [&] { b = build(comm, data, opt, c); });
@@ -264,7 +281,9 @@ SolveSummary solve(MPI_Comm comm, const ProblemData& data, const SolveOptions& o
     HistoryRecord h;
     h.iteration = k;
     r.measure(k, s.x_star, h);
+    if (!s.x_star_converged) h.max_abs_error = h.avg_max_abs_error = NAN;  // never against an unconverged x*
     h.dual_iterations = c.dual_iterations;
+    h.line_search_trials = c.line_search_trials;
     h.messages = c.messages / n;
     h.reals = c.reals / n;
     h.elapsed = MPI_Wtime() - t0;
@@ -287,7 +306,7 @@ SolveSummary solve(MPI_Comm comm, const ProblemData& data, const SolveOptions& o
     record(k);
     if (!ok) {
       s.termination = "FAILURE";
-      s.message = "non-finite Newton decrement or a Hessian that is not positive definite";
+      s.message = "non-finite Newton decrement, a Hessian that is not positive definite, or no Armijo step that decreases F";
       break;
     }
     if (r.converged(tol, s.history.back())) {

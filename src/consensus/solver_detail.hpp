@@ -2,6 +2,7 @@
 // Internals of the consensus solvers (src/consensus/*): small dense algebra,
 // communication counters, the common interface of the methods and the
 // checkpoint helpers. Not installed.
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -46,11 +47,35 @@ struct Counters {
   double messages = 0;  ///< total messages sent by all nodes
   double reals = 0;     ///< total reals in them
   std::int64_t dual_iterations = 0;
+  std::int64_t line_search_trials = 0;
   void add(double msgs, double reals_each) {
     messages += msgs;
     reals += msgs * reals_each;
   }
 };
+
+/// The primal step along a Newton direction dx whose directional derivative
+/// is -theta^2. Damped (001, Wei-Ozdaglar-Jadbabaie): 1 if theta < 1/4, else
+/// b / (theta + 1). Armijo (Boyd & Vandenberghe Alg. 9.2, alpha = 1/4,
+/// beta = 1/2): the largest t = 2^-j, j < 60, with F(x + t dx) <= F(x) -
+/// t theta^2 / 4; the full step without a trial once theta < 1/4, where
+/// Newton is in its quadratic phase and F's decrease can be below F's
+/// rounding. `f_at(t)` is collective and returns F(x + t dx) on every rank
+/// (t = 0: F(x)); each call is counted in c.line_search_trials. NaN: no t.
+template <class FAt>
+double primal_step(const SolveOptions& opt, double theta, Counters& c, FAt&& f_at) {
+  if (theta < 0.25) return 1.0;
+  if (opt.step_kind() == StepRule::kDamped) return opt.damping_b() / (theta + 1.0);
+  const double f0 = f_at(0.0);
+  ++c.line_search_trials;
+  double t = 1.0;
+  for (int j = 0; j < 60; ++j, t *= 0.5) {
+    const double f = f_at(t);
+    ++c.line_search_trials;
+    if (f <= f0 - 0.25 * t * theta * theta) return t;  // false for NaN
+  }
+  return NAN;
+}
 
 /// One method's state and iteration. Every call is collective.
 class Runner {

@@ -121,6 +121,8 @@ case("quad_h_zero", "quad", "quad_h", setrow("quad_h", (4, 1), 0.0))
 case("quad_h_negative", "quad", "quad_h", setrow("quad_h", (4, 0), -2.0))
 case("quad_h_nan", "quad", "quad_h", setrow("quad_h", (8, 1), np.nan))
 case("quad_r_inf", "quad", "quad_r", setrow("quad_r", (2, 0), np.inf))
+# Finite, but f_p or its derivatives at x = 0 overflow: a clear error about the data, not a solver failure.
+case("quad_r_huge", "quad", "overflows", setrow("quad_r", (5, 1), 1e200))
 case("quad_h_shape", "quad", "quad_h", replace("quad_h", lambda d: d[:, :1].copy()))
 case("quad_r_missing", "quad", "quad_r", replace("quad_r", lambda d: None))
 # logistic
@@ -130,6 +132,7 @@ case("owner_out_of_range", "logi", "owner", setrow("owner", 12, 30))
 case("owner_negative", "logi", "owner", setrow("owner", 13, -1))
 case("owner_shape", "logi", "owner", replace("owner", lambda d: d[:-1].copy()))
 case("features_nan", "logi", "features", setrow("features", (14, 1), np.nan))
+case("features_huge", "logi", "overflows", setrow("features", (3, 0), 1e200))
 case("features_shape", "logi", "features", replace("features", lambda d: d[:, :1].copy()))
 # Not a problem file at all.
 with open(f"{T}/bad/not_hdf5.h5", "w") as fh:
@@ -168,7 +171,9 @@ for entry in "${gen_bad[@]}"; do
       "$T/keep.h5" "${entry%|*}" >> "$T/jobs"
   done
 done
-solve_bad=("--method foo|--method" "--dual foo|--dual" "--max-iter -1|--max-iter" "--tol -1|--tol" "--bogus|--bogus")
+solve_bad=("--method foo|--method" "--dual foo|--dual" "--max-iter -1|--max-iter" "--tol -1|--tol" "--bogus|--bogus"
+  "--step wolfe|--step" "--damping 0.5|--damping" "--step damped --damping 1|--damping"
+  "--method subgradient --step armijo|--step" "--step 0.5|--step")
 for entry in "${solve_bad[@]}"; do
   for np in 1 3; do
     printf '%s\t%s\tany\t%s\tconsensus solve %s -o %s %s -q\n' "solve ${entry%|*} np=$np" "${entry#*|}" "$np" \
@@ -227,3 +232,13 @@ set -e
 "$SNL" consensus generate -o "$T/keep.h5" --nodes 12 -q
 "$SNL" consensus solve "$T/keep.h5" -o "$T/r.h5" -q
 echo "consensus_bad_input: $((n + 2)) failing runs checked in all"
+
+# `snl consensus --help` lists its commands (exit 0); an unknown command is one error line, exit 2.
+"$SNL" consensus --help > "$T/help" || fail "consensus --help: non-zero exit"
+grep -q "^  generate " "$T/help" && grep -q "^  solve " "$T/help" || { cat "$T/help"; fail "consensus --help: commands not listed"; }
+set +e
+"$SNL" consensus frob > /dev/null 2> "$T/err"; rc=$?
+set -e
+[ "$rc" -eq 2 ] && [ "$(grep -c '^snl: error: ' "$T/err")" -eq 1 ] && grep -q frob "$T/err" ||
+  { cat "$T/err"; fail "consensus frob: expected one error line and exit 2 (got $rc)"; }
+echo "consensus --help: ok"

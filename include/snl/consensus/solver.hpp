@@ -19,8 +19,12 @@ namespace snl::consensus {
 
 enum class Method { kNewtonTree, kNewtonPath, kSubgradient, kIncremental, kCentral };
 enum class DualSolver { kNone, kSplitting, kExact };
+/// Primal step of Newton and central: Armijo backtracking on F (the default),
+/// or the papers' damped step b / (theta + 1) (1 once theta < 1/4).
+enum class StepRule { kNone, kArmijo, kDamped };
 const char* method_name(Method m);
 const char* dual_name(DualSolver d);  ///< "none" | "splitting" | "exact"
+const char* step_rule_name(StepRule s);  ///< "none" | "armijo" | "damped"
 
 /// Command-line options. Those left unset take the method's default; validate()
 /// refuses non-positive values and an option the method cannot honour.
@@ -33,13 +37,16 @@ struct SolveOptions {
                                    ///< the running average <= tol (default 0: run max_iter iterations)
   std::optional<double> dual_tol;  ///< splitting ends when max|w(t+1) - w(t)| <= dual_tol max|w(t+1)|; default 1e-12
   std::optional<double> step;      ///< baselines' alpha0 in alpha_k = alpha0 / sqrt(k + 1); default 0.1
-  double damping = 0.9;            ///< b of the damped step b / (theta + 1) when theta >= 1/4
+  std::optional<std::string> step_rule;  ///< Newton, central: armijo (default) | damped
+  std::optional<double> damping;   ///< damped rule: b of b / (theta + 1) when theta >= 1/4; default 0.9
   std::string partition = "metis"; ///< metis|block
 
   /// "" when valid, else one message naming the option.
   std::string validate() const;
   Method method_kind() const;      ///< after validate()
   DualSolver dual_kind() const;    ///< kNone for the methods without a dual
+  StepRule step_kind() const;      ///< kNone for the baselines
+  double damping_b() const;
   std::int64_t max_iterations() const;
   std::int64_t dual_max_iterations() const;
   double tolerance() const;
@@ -61,19 +68,23 @@ struct HistoryRecord {
   double avg_objective = 0;          ///< F at the nodes' average of the running averages; NaN otherwise
   double decrement = 0;              ///< Newton decrement theta of the step taken (Newton, central); NaN otherwise
   double step = 0;                   ///< primal step size used
+  std::int64_t line_search_trials = 0;  ///< cumulative trial points of the Armijo rule (each one convergecast of F)
   double elapsed = 0;                ///< seconds since the solve began
 };
 
 struct SolveSummary {
-  std::string method, dual;
-  std::int64_t iterations = 0, dual_iterations = 0;
+  std::string method, dual, step_rule;
+  std::int64_t iterations = 0, dual_iterations = 0, line_search_trials = 0;
   std::string termination;  ///< CONVERGENCE | NO_CONVERGENCE | SIGNAL | FAILURE
   std::string message;
   bool converged = false;
   double max_abs_error = 0, objective = 0, messages_per_node = 0, reals_per_node = 0;
   double wall_seconds = 0;
   int ranks = 1;
-  std::vector<double> x_star;  ///< [q]
+  std::vector<double> x_star;  ///< [q] the reference optimum (central_optimum)
+  bool x_star_converged = false;  ///< false: x_star is not trusted and every error is NaN
+  std::int64_t x_star_iterations = 0;
+  double x_star_decrement = 0;    ///< the reference's last Newton decrement
   std::vector<HistoryRecord> history;
   std::string partition;       ///< what was used
   std::int32_t tree_depth = 0; ///< depth of the tree the method used (0 if none)
@@ -98,10 +109,20 @@ SolveSummary solve(MPI_Comm comm, const ProblemData& data, const SolveOptions& o
                    const CheckpointSettings& checkpoint, const RecordCallback& on_record,
                    std::vector<double>* x_rows);
 
-/// x* by the damped Newton method on F with global sums in node order
-/// (collective; the same bits on any number of ranks). Iterates until the
-/// decrement is below 1e-12 or stagnates below 1e-6 (at most 200 iterations).
-std::vector<double> central_optimum(MPI_Comm comm, const ProblemData& data);
+/// The reference optimum x* and whether it was reached.
+struct Optimum {
+  std::vector<double> x;  ///< [q]
+  bool converged = false;
+  std::int64_t iterations = 0;
+  double decrement = 0;   ///< Newton decrement theta at x
+};
+
+/// x* by Newton's method with Armijo backtracking on F, global sums in node
+/// order (collective; the same bits on any number of ranks). Converged when
+/// the decrement theta is <= 1e-12, or when it stops decreasing once below
+/// 1e-8 (1 + |F|)^(1/2) (Newton's quadratic phase has reached F's rounding
+/// level); not converged after `max_iterations` or on a numerical failure.
+Optimum central_optimum(MPI_Comm comm, const ProblemData& data, std::int64_t max_iterations = 1000);
 
 /// For tests: one Newton step of newton-tree/newton-path from the node copies
 /// `x_rows` (node order, on every rank, warm start w = 0); returns the link
