@@ -21,10 +21,10 @@ run() { echo "+ $*" | sed -e "s|$W|\$W|g" -e "s|$ROOT/|./|g" >> "$OUT/fig67_comm
 : > "$OUT/fig67_commands.txt"
 run "$SNL" consensus generate -o "$W/p.h5" --nodes 100 --family exp --hamiltonian --seed 1 | sed "s|$W|\$W|" | tee "$OUT/fig67_problem.txt"
 args=()
-# name|solve options; the paper's four curves, and the exact tree dual for comparison.
-for entry in "newton-tree|--method newton-tree" "newton-path|--method newton-path" \
+# name|solve options; the paper's four curves (Newton with the paper's damped step), and the exact tree dual for comparison.
+for entry in "newton-tree|--method newton-tree --step damped" "newton-path|--method newton-path --step damped" \
              "subgradient|--method subgradient --max-iter 1000" "incremental|--method incremental --max-iter 1000" \
-             "newton-tree-exact|--method newton-tree --dual exact"; do
+             "newton-tree-exact|--method newton-tree --dual exact --step damped"; do
   m=${entry%%|*}
   read -r -a opts <<< "${entry#*|}"
   run mpirun -np "$NP" "$SNL" consensus solve "$W/p.h5" -o "$W/$m.h5" "${opts[@]}" -q --json "$OUT/fig67_$m.json"
