@@ -381,14 +381,16 @@ int consensus_solve_main(const std::vector<std::string>& args, MPI_Comm comm) {
   app.add_option("-o,--output", cmd.output, "result file (snl-consensus-result)")->required();
   app.add_option("--method", o.method, "newton-tree|newton-path|subgradient|incremental|central")
       ->capture_default_str();
-  auto* o_dual = app.add_option("--dual", dual, "Newton's dual solver: splitting (default) or exact");
+  auto* o_dual = app.add_option("--dual", dual, "Newton's dual solver: cg (default: preconditioned CG, one-hop messages), splitting (001's) or exact "
+                                "(tree sweeps)");
   auto* o_max = app.add_option("--max-iter", max_iter, "primal iterations (default 100; baselines 1000)");
-  auto* o_dmax = app.add_option("--dual-max-iter", dual_max_iter, "dual iterations per Newton step (default 10000)");
+  auto* o_dmax = app.add_option("--dual-max-iter", dual_max_iter, "cg, splitting: dual iterations per Newton step (default 10000)");
   auto* o_tol = app.add_option("--tol", tol,
                                "Newton/central: stop when the decrement <= tol (default 1e-10); baselines: when the "
                                "running average's max error <= tol (default 0: run --max-iter)");
   auto* o_dtol = app.add_option("--dual-tol", dual_tol,
-                                "splitting: stop when max|w(t+1)-w(t)| <= dual-tol max|w(t+1)| (default 1e-12)");
+                                "splitting: stop when max|w(t+1)-w(t)| <= dual-tol max|w(t+1)|; cg: the floor of the "
+                                "forcing term eta in ||r|| <= eta ||r(0)|| (default 1e-12)");
   auto* o_step = app.add_option("--step", step,
                                 "newton-tree, newton-path, central: armijo (default: backtracking on F, one "
                                 "convergecast of F per trial) or damped (b/(theta+1)); subgradient, incremental: "

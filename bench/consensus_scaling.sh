@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Consensus Newton (001) on growing random geometric graphs of average degree 6
 # (family exp): primal iterations, dual iterations, messages per node and wall
-# time, on 1 and 2 ranks, for the two dual solvers of newton-tree:
+# time, on 1 and 2 ranks, for the three dual solvers of newton-tree (Armijo steps):
+#   cg         preconditioned CG, one-hop messages and one allreduce per iteration (the default)
 #   splitting  001's matrix-splitting iteration (the paper's method, reconstructed)
 #   exact      the exact leaf-to-root / root-to-leaf sweep of the tree system
 # and, for the splitting, the dual iterations the first Newton step needs to
@@ -21,7 +22,7 @@ ROOT=$(cd "$(dirname "$0")/.." && pwd)
 SNL=${SNL:-$ROOT/${1:-build}/bin/snl}
 NS=${NS-"100 1000 10000 100000 1000000"}
 NPS=${NPS:-"1 2"}
-DUALS=${DUALS:-"exact splitting"}
+DUALS=${DUALS:-"cg exact splitting"}
 SPLIT_FULL_MAX=${SPLIT_FULL_MAX:-10000}
 SPLIT_CAP_ITERS=${SPLIT_CAP_ITERS:-1}
 PROBE_NS=${PROBE_NS-"100 1000 10000"}
@@ -59,7 +60,7 @@ if [ -n "$NS" ]; then
   echo "# bench/consensus_scaling.sh, $(date -u +%Y-%m-%dT%H:%MZ), $(nproc) cores, $(uname -n); NS=\"$NS\" NPS=\"$NPS\" DUALS=\"$DUALS\" SPLIT_FULL_MAX=$SPLIT_FULL_MAX SPLIT_CAP_ITERS=$SPLIT_CAP_ITERS"
   echo "# snl consensus generate -o P.h5 --nodes N --avg-degree 6 --seed 1  (family exp)"
   echo "# mpirun -np NP snl consensus solve P.h5 -o R.h5 --method newton-tree --dual DUAL [--max-iter CAP] -q --json J"
-  echo "# defaults: --max-iter 100 --dual-max-iter 10000 --tol 1e-10 --dual-tol 1e-12; depth = spanning-tree depth (BFS)"
+  echo "# defaults: --max-iter 100 --dual-max-iter 10000 --tol 1e-10 --dual-tol 1e-12 --step armijo; depth = spanning-tree depth (BFS)"
   echo "# cap: Newton steps allowed ('-' = default 100); wall_solve from the JSON, wall_cmd includes start-up and I/O"
   echo "#        n    links depth np      dual    cap primal      dual    termination    max_err    msgs/node wall_solve  wall_cmd"
 } >> "$OUT"
@@ -67,6 +68,10 @@ for n in $NS; do
   "$SNL" consensus generate -o "$W/p$n.h5" --nodes "$n" --avg-degree 6 --seed 1 -q
   links=$(/usr/bin/python3 -c "import h5py,sys; print(h5py.File(sys.argv[1])['edges'].shape[0])" "$W/p$n.h5")
   for np in $NPS; do
+    if [[ " $DUALS " == *" cg "* ]]; then
+      wall=$(solve "$np" "$W/j.json" "$W/p$n.h5" -o "$W/r.h5" --method newton-tree --dual cg)
+      row "$n" "$links" "$np" cg - "$W/j.json" "$wall" >> "$OUT"
+    fi
     if [[ " $DUALS " == *" exact "* ]]; then
       wall=$(solve "$np" "$W/j.json" "$W/p$n.h5" -o "$W/r.h5" --method newton-tree --dual exact)
       row "$n" "$links" "$np" exact - "$W/j.json" "$wall" >> "$OUT"

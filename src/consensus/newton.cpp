@@ -7,13 +7,18 @@
 // Wei-Ozdaglar-Jadbabaie's matrix splitting M = A H^-1 A^T = D + B,
 //   w(t+1) = (D + Bbar)^-1 ((Bbar - B) w(t) + rhs) = w(t) + (D + Bbar)^-1 (rhs - M w(t)),
 // Bbar_ii = sum_j |B_ij| (a link only needs the links that share an end node),
+// by preconditioned conjugate gradients (neighbour messages and one allreduce
+// per iteration, an inexact-Newton forcing term tied to the decrement),
 // or exactly by one leaf-to-root and one root-to-leaf sweep. Primal step by
-// Armijo backtracking on F = sum_p f_p(x_p), one convergecast of F per trial,
+// Armijo backtracking on the Lagrangian (F on feasible iterates), one convergecast per trial,
 // or damped as in Wei-Ozdaglar-Jadbabaie (primal_step, solver_detail.hpp).
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
+#include <utility>
 
 #include "consensus/solver_detail.hpp"
+#include "core/exact_sum.hpp"
 #include "snl/core/mpi_util.hpp"
 
 namespace snl::consensus::detail {
@@ -67,6 +72,11 @@ class Newton final : public Runner {
     tmp_.assign(q, 0.0);
     one_.assign(nl, 0.0);
     z_.assign(q, 0.0);
+    for (auto* v : {&cg_w_, &cg_y_}) v->assign(nl * q, 0.0);
+    for (auto* v : {&cg_rhs_, &cg_r_, &cg_z_, &cg_az_, &cg_p_, &cg_s_}) v->assign(no * q, 0.0);
+    cg_dinv_.assign(no * qq, 0.0);
+    cg_d_.assign(qq, 0.0);
+    xdx_.assign(nl * 2 * q, 0.0);
   }
 
   std::int32_t tree_depth() const override { return tree_->depth(); }
@@ -75,6 +85,8 @@ class Newton final : public Runner {
     if (!local_derivatives()) return fail();
     if (opt_.dual_kind() == DualSolver::kExact) {
       if (!exact_dual(c)) return fail();
+    } else if (opt_.dual_kind() == DualSolver::kCg) {
+      if (!cg_dual(c)) return fail();
     } else {
       splitting_dual(c);
     }
@@ -215,6 +227,143 @@ class Newton final : public Runner {
     }
   }
 
+  // M w = A H^-1 A^T w on the tree's links, w given on the owned links (the
+  // root's row ignored): y_v = H_v^-1 (w_v - sum of the children's w, in
+  // global-id order), then (M w)_c = y_c - y_parent(c). Two neighbour
+  // exchanges: w up to the parents, y down to the children.
+  void dual_matvec(const double* w, double* mw, Counters& c) {
+    DistGraph& g = tree_->graph();
+    const int q = q_;
+    const LocalId no = g.num_owned();
+    const auto& off = g.offsets();
+    const auto& adj = g.adjacency();
+    for (LocalId v = 0; v < no; ++v)
+      for (int k = 0; k < q; ++k)
+        cg_w_[std::size_t(v) * q + k] = tree_->parent_entry(v) >= 0 ? w[std::size_t(v) * q + k] : 0.0;
+    g.halo().exchange(cg_w_.data(), q);
+    c.add(double(n_ - 1), q);
+    for (LocalId v = 0; v < no; ++v) {
+      for (int k = 0; k < q; ++k) tmp_[k] = cg_w_[std::size_t(v) * q + k];
+      for (auto e = off[v]; e < off[v + 1]; ++e) {
+        if (e == tree_->parent_entry(v)) continue;
+        for (int k = 0; k < q; ++k) tmp_[k] -= cg_w_[std::size_t(adj[e]) * q + k];
+      }
+      matvec(q, &pk_[std::size_t(v) * pw_ + 3 * q], tmp_.data(), &cg_y_[std::size_t(v) * q]);
+    }
+    g.halo().exchange(cg_y_.data(), q);
+    c.add(double(n_ - 1), q);
+    if (!mw) return;
+    for (LocalId v = 0; v < no; ++v) {
+      const auto pe = tree_->parent_entry(v);
+      for (int k = 0; k < q; ++k)
+        mw[std::size_t(v) * q + k] =
+            pe >= 0 ? cg_y_[std::size_t(v) * q + k] - cg_y_[std::size_t(adj[pe]) * q + k] : 0.0;
+    }
+  }
+
+  // Exact sums over the owned links of a_l . b_l (pairs[i] = (a, b)), in one
+  // allreduce: the same bits on any number of ranks. Counted as a convergecast
+  // and a broadcast on the tree.
+  void link_dots(std::initializer_list<std::pair<const double*, const double*>> pairs, double* out, Counters& c) {
+    snl::detail::ExactSum sums[3];
+    const LocalId no = tree_->num_owned();
+    for (LocalId v = 0; v < no; ++v) {
+      if (tree_->parent_entry(v) < 0) continue;
+      int i = 0;
+      for (const auto& ab : pairs) {
+        for (int k = 0; k < q_; ++k) sums[i].add(ab.first[std::size_t(v) * q_ + k] * ab.second[std::size_t(v) * q_ + k]);
+        ++i;
+      }
+    }
+    const int n = static_cast<int>(pairs.size());
+    snl::detail::allreduce_exact(sums, n, comm_);
+    for (int i = 0; i < n; ++i) out[i] = sums[i].value();
+    c.add(2 * double(n_ - 1), n);
+  }
+
+  // The dual by preconditioned CG (Chronopoulos-Gear: one allreduce per
+  // iteration) with the block-Jacobi preconditioner (H_c^-1 + H_P^-1)^-1 of
+  // each link, warm-started from the previous step's w. The residual
+  // r = rhs - M w is the infeasibility A (x + dx) that the step leaves, and
+  // the next step starts from it. Inexact Newton: CG stops when
+  // ||r|| <= eta ||r(0)||, eta = max(dual_tol, min(0.1, theta of the
+  // previous step)): every step cuts the infeasibility at least tenfold,
+  // and the last ones to the noise. A dual iteration is one product with M.
+  bool cg_dual(Counters& c) {
+    DistGraph& g = tree_->graph();
+    const int q = q_, qq = q * q;
+    const LocalId no = g.num_owned();
+    g.halo().exchange(pk_.data(), pw_);  // x, u, w, H^-1, degree to the tree neighbours
+    c.add(2 * double(n_ - 1), pw_);
+    const auto& adj = g.adjacency();
+    int bad = 0;
+    for (LocalId v = 0; v < no; ++v) {
+      const auto pe = tree_->parent_entry(v);
+      double* r = &cg_rhs_[std::size_t(v) * q];
+      double* dinv = &cg_dinv_[std::size_t(v) * qq];
+      if (pe < 0) {
+        std::fill(r, r + q, 0.0);
+        std::fill(dinv, dinv + qq, 0.0);
+        continue;
+      }
+      const double* pc = &pk_[std::size_t(v) * pw_];
+      const double* pp = &pk_[std::size_t(adj[pe]) * pw_];
+      for (int k = 0; k < q; ++k) r[k] = (pc[k] - pp[k]) - (pc[q + k] - pp[q + k]);
+      for (int k = 0; k < qq; ++k) cg_d_[k] = pc[3 * q + k] + pp[3 * q + k];
+      if (!spd_inverse(q, cg_d_.data(), dinv, work_.data())) bad = 1;
+    }
+    int any = 0;
+    MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_MAX, comm_);
+    if (any) return false;
+    const double eta =
+        std::max(opt_.dual_tolerance(), std::min(0.1, std::isfinite(theta_) ? theta_ : INFINITY));
+    const std::size_t m = std::size_t(no) * q;
+    double* w = w_.data();
+    auto precondition = [&] {
+      for (LocalId v = 0; v < no; ++v)
+        matvec(q, &cg_dinv_[std::size_t(v) * qq], &cg_r_[std::size_t(v) * q], &cg_z_[std::size_t(v) * q]);
+    };
+    dual_matvec(w, cg_az_.data(), c);  // M w(0)
+    for (std::size_t i = 0; i < m; ++i) cg_r_[i] = cg_rhs_[i] - cg_az_[i];
+    precondition();
+    dual_matvec(cg_z_.data(), cg_az_.data(), c);
+    double d3[3];
+    link_dots({{cg_r_.data(), cg_z_.data()}, {cg_az_.data(), cg_z_.data()}, {cg_r_.data(), cg_r_.data()}}, d3, c);
+    double gamma = d3[0], delta = d3[1], rr = d3[2];
+    const double bound = eta * eta * rr;
+    double alpha = gamma / delta, beta = 0;
+    std::fill(cg_p_.begin(), cg_p_.end(), 0.0);
+    std::fill(cg_s_.begin(), cg_s_.end(), 0.0);
+    std::int64_t t = 2;  // products with M so far
+    while (rr > bound && gamma > 0 && delta > 0 && t < opt_.dual_max_iterations()) {
+      for (std::size_t i = 0; i < m; ++i) {
+        cg_p_[i] = cg_z_[i] + beta * cg_p_[i];
+        cg_s_[i] = cg_az_[i] + beta * cg_s_[i];
+        w[i] += alpha * cg_p_[i];
+        cg_r_[i] -= alpha * cg_s_[i];
+      }
+      precondition();
+      dual_matvec(cg_z_.data(), cg_az_.data(), c);
+      ++t;
+      link_dots({{cg_r_.data(), cg_z_.data()}, {cg_az_.data(), cg_z_.data()}, {cg_r_.data(), cg_r_.data()}}, d3, c);
+      const double gamma_new = d3[0];
+      delta = d3[1];
+      rr = d3[2];
+      beta = gamma_new / gamma;
+      alpha = gamma_new / (delta - beta * gamma_new / alpha);
+      gamma = gamma_new;
+    }
+    c.dual_iterations += t;
+    // dx_v = -(u_v + y_v) with y = H^-1 A^T w of the final w (w's exchange up only).
+    dual_matvec(w, nullptr, c);
+    for (LocalId v = 0; v < no; ++v)
+      for (int k = 0; k < q; ++k)
+        dx_[std::size_t(v) * q + k] = -(pk_[std::size_t(v) * pw_ + q + k] + cg_y_[std::size_t(v) * q + k]);
+    for (LocalId v = 0; v < no; ++v)
+      if (tree_->parent_entry(v) < 0) std::fill(&w_[std::size_t(v) * q], &w_[std::size_t(v) * q] + q, 0.0);
+    return std::isfinite(rr);
+  }
+
   // y_v = H_v^-1 (w_v - sum over children c, in global-id order, of w_c), with
   // ev = (w_v, y_v) and child_w(e) the child's w at adjacency entry e.
   template <class ChildW>
@@ -273,14 +422,37 @@ class Newton final : public Runner {
     return true;
   }
 
-  // F(x + t dx) = sum_p f_p(x_p + t dx_p) by a convergecast over the tree
-  // (children in global-id order) and a broadcast of the total.
+  // The line search's merit at x + t dx: the Lagrangian
+  //   L(x, w) = sum_p f_p(x_p) + sum over links (c, P) of w_c . (x_c - x_P)
+  // with the step's duals w, whose slope along dx is (g + A^T w) . dx =
+  // -dx^T H dx = -theta^2 for any w: the Armijo test holds what it promises
+  // even when an inexact dual leaves the copies apart (then F alone can rise
+  // along dx, as the copies are pulled together). On feasible iterates (the
+  // exact dual) L = F. At t = 0 the parents' x and dx come to their children
+  // (one message of 2q reals per link); each value is a convergecast of L and
+  // a broadcast of the total.
   double objective_along(double t, Counters& c) {
     const int q = q_;
     const LocalId no = tree_->num_owned();
+    if (t == 0.0) {
+      for (LocalId v = 0; v < no; ++v)
+        for (int k = 0; k < q; ++k) {
+          xdx_[std::size_t(v) * 2 * q + k] = x_[std::size_t(v) * q + k];
+          xdx_[std::size_t(v) * 2 * q + q + k] = dx_[std::size_t(v) * q + k];
+        }
+      tree_->graph().halo().exchange(xdx_.data(), 2 * q);
+      c.add(double(n_ - 1), 2 * q);
+    }
+    const auto& adj = tree_->graph().adjacency();
     for (LocalId v = 0; v < no; ++v) {
-      for (int k = 0; k < q; ++k) tmp_[k] = x_[std::size_t(v) * q + k] + t * dx_[std::size_t(v) * q + k];
+      const double* mine = &xdx_[std::size_t(v) * 2 * q];
+      for (int k = 0; k < q; ++k) tmp_[k] = mine[k] + t * mine[q + k];
       one_[v] = obj_.value(v, tmp_.data());
+      const auto pe = tree_->parent_entry(v);
+      if (pe < 0) continue;
+      const double* par = &xdx_[std::size_t(adj[pe]) * 2 * q];
+      for (int k = 0; k < q; ++k)
+        one_[v] += w_[std::size_t(v) * q + k] * ((mine[k] + t * mine[q + k]) - (par[k] + t * par[q + k]));
     }
     return tree_total(c);
   }
@@ -314,6 +486,9 @@ class Newton final : public Runner {
   LocalObjectives obj_;
   NodeGather gather_;
   std::vector<double> x_, w_, grad_, hess_, pk_, lrhs_, ldinv_, wnew_, e_[2], dx_, up_, work_, tmp_, one_, z_;
+  std::vector<double> cg_w_, cg_y_;  // [local * q] with ghosts: w and y = H^-1 A^T w for dual_matvec
+  std::vector<double> cg_rhs_, cg_r_, cg_z_, cg_az_, cg_p_, cg_s_, cg_dinv_, cg_d_;
+  std::vector<double> xdx_;  // [local * 2q] (x, dx) with the ghosts: the line search's merit  // [owned * q], dinv [owned * q * q]
   double theta_ = NAN, step_ = 0;
 };
 

@@ -36,6 +36,7 @@ const char* dual_name(DualSolver d) {
   switch (d) {
     case DualSolver::kSplitting: return "splitting";
     case DualSolver::kExact: return "exact";
+    case DualSolver::kCg: return "cg";
     case DualSolver::kNone: return "none";
   }
   return "?";
@@ -58,7 +59,8 @@ Method SolveOptions::method_kind() const {
 
 DualSolver SolveOptions::dual_kind() const {
   if (!is_newton(method_kind())) return DualSolver::kNone;
-  return (dual && *dual == "exact") ? DualSolver::kExact : DualSolver::kSplitting;
+  if (!dual || *dual == "cg") return DualSolver::kCg;
+  return *dual == "exact" ? DualSolver::kExact : DualSolver::kSplitting;
 }
 
 StepRule SolveOptions::step_kind() const {
@@ -73,17 +75,17 @@ std::string SolveOptions::validate() const {
     return "unknown --method '" + method + "' (expected newton-tree, newton-path, subgradient, incremental or central)";
   const Method m = method_kind();
   const std::string who = "--method " + method;
-  if (dual && *dual != "splitting" && *dual != "exact")
-    return "unknown --dual '" + *dual + "' (expected splitting or exact)";
+  if (dual && *dual != "cg" && *dual != "splitting" && *dual != "exact")
+    return "unknown --dual '" + *dual + "' (expected cg, splitting or exact)";
   if (dual && !is_newton(m)) return "--dual applies to newton-tree and newton-path only, not to " + who;
   if (max_iter && *max_iter < 0) return "--max-iter must be >= 0";
   if (tol && !(std::isfinite(*tol) && *tol >= 0)) return "--tol must be a finite number >= 0";
   if (dual_max_iter && *dual_max_iter < 1) return "--dual-max-iter must be >= 1";
   if (dual_tol && !(std::isfinite(*dual_tol) && *dual_tol > 0)) return "--dual-tol must be a finite number > 0";
   if (step && !(std::isfinite(*step) && *step > 0)) return "--step must be a finite number > 0";
-  if ((dual_max_iter || dual_tol) && dual_kind() != DualSolver::kSplitting)
+  if ((dual_max_iter || dual_tol) && dual_kind() != DualSolver::kSplitting && dual_kind() != DualSolver::kCg)
     return std::string(dual_max_iter ? "--dual-max-iter" : "--dual-tol") +
-           " applies to the splitting dual of newton-tree and newton-path only, not to " + who +
+           " applies to the cg and splitting duals of newton-tree and newton-path only, not to " + who +
            (is_newton(m) ? " --dual exact" : "");
   if (step && !is_baseline(m))
     return "--step A (alpha0) applies to subgradient and incremental only; " + who + " takes --step armijo|damped";
@@ -111,7 +113,7 @@ std::string SolveOptions::checkpoint_key() const {
   std::ostringstream os;
   os.precision(17);
   os << "method=" << method << " dual=" << dual_name(dual_kind());
-  if (dual_kind() == DualSolver::kSplitting)
+  if (dual_kind() == DualSolver::kSplitting || dual_kind() == DualSolver::kCg)
     os << " dual_max_iter=" << dual_max_iterations() << " dual_tol=" << dual_tolerance();
   if (is_baseline(method_kind())) os << " step=" << step0();
   os << " step_rule=" << step_rule_name(step_kind());

@@ -18,24 +18,26 @@
 namespace snl::consensus {
 
 enum class Method { kNewtonTree, kNewtonPath, kSubgradient, kIncremental, kCentral };
-enum class DualSolver { kNone, kSplitting, kExact };
+enum class DualSolver { kNone, kSplitting, kExact, kCg };
 /// Primal step of Newton and central: Armijo backtracking on F (the default),
 /// or the papers' damped step b / (theta + 1) (1 once theta < 1/4).
 enum class StepRule { kNone, kArmijo, kDamped };
 const char* method_name(Method m);
-const char* dual_name(DualSolver d);  ///< "none" | "splitting" | "exact"
+const char* dual_name(DualSolver d);  ///< "none" | "splitting" | "exact" | "cg"
 const char* step_rule_name(StepRule s);  ///< "none" | "armijo" | "damped"
 
 /// Command-line options. Those left unset take the method's default; validate()
 /// refuses non-positive values and an option the method cannot honour.
 struct SolveOptions {
   std::string method = "newton-tree";       ///< newton-tree|newton-path|subgradient|incremental|central
-  std::optional<std::string> dual;          ///< splitting|exact (Newton only); default splitting
+  std::optional<std::string> dual;          ///< cg|splitting|exact (Newton only); default cg
   std::optional<std::int64_t> max_iter;     ///< primal iterations; default 100 (Newton, central), 1000 (baselines)
-  std::optional<std::int64_t> dual_max_iter;  ///< dual iterations per Newton step (splitting); default 10000
+  std::optional<std::int64_t> dual_max_iter;  ///< dual iterations per Newton step (cg, splitting); default 10000
   std::optional<double> tol;       ///< Newton, central: decrement theta <= tol (default 1e-10); baselines: error of
                                    ///< the running average <= tol (default 0: run max_iter iterations)
-  std::optional<double> dual_tol;  ///< splitting ends when max|w(t+1) - w(t)| <= dual_tol max|w(t+1)|; default 1e-12
+  std::optional<double> dual_tol;  ///< splitting ends when max|w(t+1) - w(t)| <= dual_tol max|w(t+1)|; cg: the
+                                   ///< floor of its forcing term (||r|| <= max(dual_tol, min(0.1, theta_prev)) ||rhs||);
+                                   ///< default 1e-12
   std::optional<double> step;      ///< baselines' alpha0 in alpha_k = alpha0 / sqrt(k + 1); default 0.1
   std::optional<std::string> step_rule;  ///< Newton, central: armijo (default) | damped
   std::optional<double> damping;   ///< damped rule: b of b / (theta + 1) when theta >= 1/4; default 0.9
