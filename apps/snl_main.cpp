@@ -317,7 +317,7 @@ int guarded(MPI_Comm comm, Body&& body) {
 
 }  // namespace
 
-// The options of `snl consensus generate|solve` (docs/consensus.md). They live
+// The options of `snl consensus generate|import|solve` (docs/consensus.md). They live
 // here, beside the other subcommands' options, so that CLI11 (header-only) is
 // compiled in one translation unit.
 namespace snl {
@@ -332,21 +332,23 @@ int consensus_generate_main(const std::vector<std::string>& args, MPI_Comm comm)
   app.add_option("--nodes", cmd.options.nodes, "number of nodes n")->required();
   app.add_option("--avg-degree", cmd.options.avg_degree, "average degree of the random geometric graph")
       ->capture_default_str();
-  app.add_option("--family", family, "exp|quadratic|logistic")->capture_default_str();
+  app.add_option("--family", family, "exp|quadratic|logistic|least_squares")->capture_default_str();
   app.add_option("--dim", cmd.options.dim, "size q of x (1 for exp)")->capture_default_str();
   app.add_flag("--hamiltonian", cmd.options.hamiltonian, "plant a Hamilton path (stored in truth_path)");
   app.add_option("--seed", cmd.options.seed, "random seed")->check(kSeed)->capture_default_str();
-  app.add_option("--samples-per-node", cmd.options.samples_per_node, "logistic: samples owned by each node")
+  app.add_option("--samples-per-node", cmd.options.samples_per_node,
+                 "logistic, least_squares: samples owned by each node")
       ->capture_default_str();
-  app.add_option("--lambda", cmd.options.lambda, "logistic: regularisation weight (> 0)")->capture_default_str();
+  app.add_option("--lambda", cmd.options.lambda, "logistic, least_squares: regularisation weight (> 0)")
+      ->capture_default_str();
   app.add_flag("-q,--quiet", cmd.quiet, "print nothing on success");
 
   // Bad options (exit 2): parse errors, unknown family, option rules.
   try {
     std::vector<std::string> rev(args.rbegin(), args.rend());  // CLI11 takes them reversed
     app.parse(rev);
-    if (family != "exp" && family != "quadratic" && family != "logistic")
-      throw Error("--family must be exp, quadratic or logistic (got '" + family + "')");
+    if (family != "exp" && family != "quadratic" && family != "logistic" && family != "least_squares")
+      throw Error("--family must be exp, quadratic, logistic or least_squares (got '" + family + "')");
     cmd.options.family = consensus::parse_family(family);
     cmd.options.validate();
   } catch (const CLI::CallForHelp&) {
@@ -368,13 +370,52 @@ int consensus_generate_main(const std::vector<std::string>& args, MPI_Comm comm)
   return 0;
 }
 
+int consensus_import_main(const std::vector<std::string>& args, MPI_Comm comm) {
+  const bool root = comm_rank(comm) == 0;
+  ConsensusImportCommand cmd;
+  CLI::App app{"build a consensus problem file (snl-consensus) from CSV tables of samples and links",
+               "snl consensus import"};
+  app.add_option("--samples", cmd.samples,
+                 "CSV with a header row: a node id column, feature columns, a label (logistic: +1/-1) or target "
+                 "(least_squares) column")
+      ->required();
+  app.add_option("--edges", cmd.edges, "CSV of links: two node ids per row (a header row is optional)")->required();
+  app.add_option("-o,--output", cmd.output, "output problem file")->required();
+  app.add_option("--family", cmd.family, "logistic|least_squares")->required();
+  app.add_option("--lambda", cmd.lambda, "regularisation weight (> 0)")->capture_default_str();
+  app.add_option("--nodes", cmd.nodes, "number of nodes n (default: the largest node id + 1)");
+  app.add_option("--node-column", cmd.node_column, "header name of the node id column (default: the first)");
+  app.add_option("--label-column", cmd.label_column, "header name of the label/target column (default: the last)");
+  app.add_flag("-q,--quiet", cmd.quiet, "print nothing on success");
+  try {
+    std::vector<std::string> rev(args.rbegin(), args.rend());  // CLI11 takes them reversed
+    app.parse(rev);
+  } catch (const CLI::CallForHelp&) {
+    if (root) std::printf("%s", app.help().c_str());
+    return 0;
+  } catch (const CLI::ParseError& e) {
+    if (root) std::fprintf(stderr, "snl: error: %s (see snl consensus import --help)\n", e.what());
+    return 2;
+  }
+  try {
+    run_consensus_import(cmd, comm);
+  } catch (const UsageError& e) {
+    if (root) std::fprintf(stderr, "snl: error: %s\n", e.what());
+    return 2;
+  } catch (const Error& e) {
+    if (root) std::fprintf(stderr, "snl: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
+
 int consensus_solve_main(const std::vector<std::string>& args, MPI_Comm comm) {
   const bool root = comm_rank(comm) == 0;
   ConsensusSolveCommand cmd;
   auto& o = cmd.solver;
   std::string dual;
   std::int64_t max_iter = 0, dual_max_iter = 0;
-  double tol = 0, dual_tol = 0, damping = 0;
+  double tol = 0, oracle_tol = 0, dual_tol = 0, damping = 0;
   std::string step;
   CLI::App app{"solve a consensus problem with a distributed method (run under mpirun)", "snl consensus solve"};
   app.add_option("problem", cmd.problem, "problem file (snl-consensus)")->required();
@@ -387,7 +428,11 @@ int consensus_solve_main(const std::vector<std::string>& args, MPI_Comm comm) {
   auto* o_dmax = app.add_option("--dual-max-iter", dual_max_iter, "cg, splitting: dual iterations per Newton step (default 10000)");
   auto* o_tol = app.add_option("--tol", tol,
                                "Newton/central: stop when the decrement <= tol (default 1e-10); baselines: when the "
-                               "running average's max error <= tol (default 0: run --max-iter)");
+                               "running average's largest change in one iteration, max over nodes of "
+                               "|xhat_p(k) - xhat_p(k-1)|, <= tol (default 0: run --max-iter)");
+  auto* o_otol = app.add_option("--oracle-tol", oracle_tol,
+                                "baselines: stop when the running average's max error against the oracle x* <= "
+                                "oracle-tol (no node knows x*; default 0: off)");
   auto* o_dtol = app.add_option("--dual-tol", dual_tol,
                                 "splitting: stop when max|w(t+1)-w(t)| <= dual-tol max|w(t+1)|; cg: the floor of the "
                                 "forcing term eta in ||r|| <= eta ||r(0)|| (default 1e-12)");
@@ -410,6 +455,7 @@ int consensus_solve_main(const std::vector<std::string>& args, MPI_Comm comm) {
     if (o_max->count()) o.max_iter = max_iter;
     if (o_dmax->count()) o.dual_max_iter = dual_max_iter;
     if (o_tol->count()) o.tol = tol;
+    if (o_otol->count()) o.oracle_tol = oracle_tol;
     if (o_dtol->count()) o.dual_tol = dual_tol;
     if (o_step->count()) {
       char* end = nullptr;
@@ -445,7 +491,7 @@ int consensus_solve_main(const std::vector<std::string>& args, MPI_Comm comm) {
 
 namespace {
 
-// `snl consensus generate|solve ...` (seed 001): those commands parse their own
+// `snl consensus generate|import|solve ...` (seed 001): those commands parse their own
 // options; failures become one message and an exit status, as every command.
 int run_consensus(int argc, char** argv, MPI_Comm comm) {
   const bool root = snl::comm_rank(comm) == 0;
@@ -454,6 +500,7 @@ int run_consensus(int argc, char** argv, MPI_Comm comm) {
   return guarded(comm, [&] {
     if (which == "generate") return snl::consensus_generate_main(rest, comm);
     if (which == "solve") return snl::consensus_solve_main(rest, comm);
+    if (which == "import") return snl::consensus_import_main(rest, comm);
     if (which == "--help" || which == "-h") {
       if (root)
         std::printf(
@@ -461,7 +508,8 @@ int run_consensus(int argc, char** argv, MPI_Comm comm) {
             "docs/distributed-newton.md)\n\n"
             "usage: snl consensus COMMAND [OPTIONS]\n\n"
             "commands:\n"
-            "  generate  write a random problem (exp, quadratic or logistic family) to an HDF5 file\n"
+            "  generate  write a random problem (exp, quadratic, logistic or least_squares) to an HDF5 file\n"
+            "  import    build a problem file (logistic or least_squares) from CSV tables of samples and links\n"
             "  solve     solve a problem file under mpirun: distributed Newton (newton-tree, newton-path),\n"
             "            the baselines (subgradient, incremental) or central\n\n"
             "each command's options: snl consensus COMMAND --help\n");
@@ -469,8 +517,9 @@ int run_consensus(int argc, char** argv, MPI_Comm comm) {
     }
     if (root)
       std::fprintf(stderr, "snl: error: %s (see snl consensus --help)\n",
-                   which.empty() ? "a command is needed: snl consensus generate|solve ..."
-                                 : ("unknown consensus command '" + which + "'; expected generate or solve").c_str());
+                   which.empty() ? "a command is needed: snl consensus generate|import|solve ..."
+                                 : ("unknown consensus command '" + which + "'; expected generate, import or solve")
+                                       .c_str());
     return snl::kExitUsage;
   });
 }
@@ -501,8 +550,8 @@ int main(int argc, char** argv) {
   add_import(app, c);
   add_export(app, c);
 
-  // `snl consensus generate|solve ...` (seed 001) parse their own options.
-  app.add_subcommand("consensus", "consensus optimisation (seed 001): snl consensus generate|solve --help")
+  // `snl consensus generate|import|solve ...` (seed 001) parse their own options.
+  app.add_subcommand("consensus", "consensus optimisation (seed 001): snl consensus generate|import|solve --help")
       ->allow_extras()
       ->prefix_command();
   int status = 0;

@@ -25,7 +25,7 @@ std::string summary_line(const ConsensusGenerateCommand& cmd, const consensus::P
   if (cmd.options.hamiltonian) os << ", " << rep.path_links << " from the planted Hamilton path";
   os << ", " << rep.connect_links << " joining " << rep.components << " component(s))"
      << ", family " << consensus::family_name(d.family) << ", dim " << d.dim;
-  if (d.family == consensus::Family::kLogistic) os << ", " << d.num_samples() << " samples, lambda " << d.lambda;
+  if (consensus::has_samples(d.family)) os << ", " << d.num_samples() << " samples, lambda " << d.lambda;
   os << ", seed " << cmd.options.seed << std::fixed << std::setprecision(3) << "\ntime: generate " << t_gen
      << " s, write " << t_write << " s";
   return os.str();

@@ -1,5 +1,6 @@
 // snl export: a result's positions as CSV (docs/formats.md, "Text files"),
-// written on rank 0; with the network, each sensor's localizability flags.
+// written on rank 0; with the network, each sensor's localizability flags. A
+// consensus result (snl consensus solve) gives its x per node instead.
 #include <cstdio>
 #include <sstream>
 
@@ -71,6 +72,15 @@ void run_export(const ExportCommand& cmd, MPI_Comm comm) {
   std::string text;
   collective_try(comm, [&] {
     if (!is_root(comm)) return;
+    if (detail::hdf5_format(cmd.result) == "snl-consensus-result") {  // x of every node (docs/consensus.md)
+      if (!cmd.network.empty())
+        throw Error(cmd.result + ": a consensus result has no sensors: --network applies to localization results only");
+      std::int64_t n = 0, q = 0;
+      write_text_atomic(cmd.output, detail::consensus_x_csv(cmd.result, cmd.index_base, &n, &q));
+      text = "exported " + cmd.output + ": x of " + std::to_string(n) + " nodes, q=" + std::to_string(q) +
+             " (consensus result)";
+      return;
+    }
     const ResultFile r = read_result_serial(cmd.result);
     std::vector<std::uint8_t> flags;
     std::string source;

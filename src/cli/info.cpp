@@ -1,4 +1,5 @@
-// snl info: summary and validation of a network file (on rank 0).
+// snl info: summary and validation of a network file (on rank 0), or of a
+// consensus problem or result (src/cli/consensus_files.cpp).
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -46,6 +47,13 @@ void run_info(const InfoCommand& cmd, MPI_Comm comm) {
   bool unlocalizable = false;
   collective_try(comm, [&] {
     if (!is_root(comm)) return;
+    // A consensus problem or result (docs/consensus.md) has a summary of its own.
+    if (const std::string format = detail::hdf5_format(cmd.network);
+        format == "snl-consensus" || format == "snl-consensus-result") {
+      text = detail::consensus_info(cmd.network, format, &json);
+      if (!cmd.json.empty()) write_text_atomic(cmd.json, json);
+      return;
+    }
     Network net = read_network_serial(cmd.network);
     const MergeStats ms = merge_duplicates(net.sensor_edges, net.sensor_ranges, net.anchor_edges, net.anchor_ranges);
     net.total_sensor_edges = net.local_sensor_edges();

@@ -7,6 +7,10 @@
 //   in the cycle; running average of the iterate at the cycles' ends.
 // Both use the diminishing step alpha_k = alpha0 / sqrt(k + 1), k the primal
 // iteration (a cycle for incremental) counted from 0.
+// Stopping rules (docs/distributed-newton.md): --tol T, the running average's
+// largest change in one iteration, max_p |xhat_p(k) - xhat_p(k-1)| <= T (each
+// node knows its own change; the max is exact in any order); --oracle-tol T,
+// the running average's error against x* <= T (an oracle no node has).
 #include <algorithm>
 #include <cmath>
 
@@ -18,6 +22,23 @@ namespace snl::consensus::detail {
 namespace {
 
 double step_size(double alpha0, std::int64_t k) { return alpha0 / std::sqrt(double(k) + 1.0); }
+
+/// The baselines' stop: the change rule (tol) or the oracle rule (oracle_tol), either when set (> 0).
+bool baseline_stop(const SolveOptions& opt, double tol, double change, const HistoryRecord& r) {
+  const double oracle = opt.oracle_tol ? *opt.oracle_tol : 0.0;
+  return (tol > 0 && change <= tol) || (oracle > 0 && r.avg_max_abs_error <= oracle);
+}
+
+/// max_j |sum_new[j] / (k + 1) - sum_old[j] / k| for q values: the running
+/// average's change in iteration k -> k + 1 (xhat(0) = x(0) = 0).
+double average_change(const double* sum_new, const double* sum_old, std::int64_t k, int q) {
+  double m = 0;
+  for (int j = 0; j < q; ++j) {
+    const double before = k > 0 ? sum_old[j] / double(k) : 0.0;
+    m = std::max(m, std::fabs(sum_new[j] / double(k + 1) - before));
+  }
+  return m;
+}
 
 class Subgradient final : public Runner {
  public:
@@ -50,6 +71,7 @@ class Subgradient final : public Runner {
     xn_.assign(std::size_t(no) * q_, 0.0);
     sum_.assign(std::size_t(no) * q_, 0.0);
     grad_.assign(q_, 0.0);
+    old_.assign(q_, 0.0);
   }
 
   bool iterate(std::int64_t k, Counters& c) override {
@@ -70,17 +92,24 @@ class Subgradient final : public Runner {
       for (int j = 0; j < q; ++j) out[j] -= alpha * grad_[j];
     }
     bool finite = true;
-    for (std::size_t i = 0; i < xn_.size(); ++i) {
-      x_[i] = xn_[i];
-      sum_[i] += xn_[i];
-      finite = finite && std::isfinite(xn_[i]);
+    double change = 0;
+    for (LocalId v = 0; v < no; ++v) {
+      const std::size_t at = std::size_t(v) * q;
+      for (int j = 0; j < q; ++j) old_[j] = sum_[at + j];
+      for (int j = 0; j < q; ++j) {
+        x_[at + j] = xn_[at + j];
+        sum_[at + j] += xn_[at + j];
+        finite = finite && std::isfinite(xn_[at + j]);
+      }
+      change = std::max(change, average_change(&sum_[at], old_.data(), k, q));
     }
     int bad = finite ? 0 : 1, any = 0;
     MPI_Allreduce(&bad, &any, 1, MPI_INT, MPI_MAX, comm_);
+    if (opt_.tolerance() > 0) MPI_Allreduce(&change, &change_, 1, MPI_DOUBLE, MPI_MAX, comm_);
     return any == 0;
   }
 
-  bool converged(double tol, const HistoryRecord& r) const override { return tol > 0 && r.avg_max_abs_error <= tol; }
+  bool converged(double tol, const HistoryRecord& r) const override { return baseline_stop(opt_, tol, change_, r); }
 
   void measure(std::int64_t k, const std::vector<double>& xstar, HistoryRecord& r) override {
     const LocalId no = g_->num_owned();
@@ -118,7 +147,8 @@ class Subgradient final : public Runner {
   GlobalId n_, edges_;
   LocalObjectives obj_;
   NodeGather gather_;
-  std::vector<double> wn_, ws_, x_, xn_, sum_, grad_;
+  std::vector<double> wn_, ws_, x_, xn_, sum_, grad_, old_;
+  double change_ = INFINITY;  ///< max_p |xhat_p(k) - xhat_p(k-1)| of the last iteration (all ranks)
 };
 
 // The token's tour is known to every rank (a path, or the Euler tour of the
@@ -171,13 +201,15 @@ class Incremental final : public Runner {
     // The iterate at the cycle's end, for the running average (a report, not
     // part of the method: every rank keeps the same copy).
     MPI_Bcast(token_.data(), q_, MPI_DOUBLE, holder, comm_);
+    const std::vector<double> old = sum_;
     for (int j = 0; j < q_; ++j) sum_[j] += token_[j];
+    change_ = average_change(sum_.data(), old.data(), k, q_);  // the same on every rank
     bool finite = true;
     for (double t : token_) finite = finite && std::isfinite(t);
     return finite;
   }
 
-  bool converged(double tol, const HistoryRecord& r) const override { return tol > 0 && r.avg_max_abs_error <= tol; }
+  bool converged(double tol, const HistoryRecord& r) const override { return baseline_stop(opt_, tol, change_, r); }
 
   void measure(std::int64_t k, const std::vector<double>& xstar, HistoryRecord& r) override {
     r.max_abs_error = max_abs_error(comm_, x_.data(), static_cast<LocalId>(owned_.size()), xstar);
@@ -230,6 +262,7 @@ class Incremental final : public Runner {
   LocalObjectives obj_;
   NodeGather gather_;
   std::vector<double> x_, token_, sum_, grad_;
+  double change_ = INFINITY;  ///< the running average's change in the last cycle (every rank the same)
 };
 
 }  // namespace

@@ -1,4 +1,4 @@
-// The local objectives f_p of the three problem families (docs/consensus.md):
+// The local objectives f_p of the four problem families (docs/consensus.md):
 // value, gradient and Hessian at a q-vector x.
 #include <cmath>
 #include <cstring>
@@ -51,7 +51,8 @@ LocalObjectives::LocalObjectives(const ProblemData& data, const std::vector<Glob
           p1_[v * q + k] = data.quad_r[static_cast<std::size_t>(nodes_[v]) * q + k];
         }
       break;
-    case Family::kLogistic: {
+    case Family::kLogistic:
+    case Family::kLeastSquares: {
       // Samples grouped by local node, in file order within a node.
       std::vector<std::int64_t> local(static_cast<std::size_t>(n_global_), -1);
       for (std::size_t v = 0; v < m; ++v) local[nodes_[v]] = static_cast<std::int64_t>(v);
@@ -93,6 +94,14 @@ double LocalObjectives::value(LocalId v, const double* x) const {
         f += softplus(-labels_[s] * dot(&features_[s * q], x, q));
       return f;
     }
+    case Family::kLeastSquares: {
+      double f = 0.5 * lambda_ / static_cast<double>(n_global_) * dot(x, x, q);
+      for (std::int64_t s = sample_begin_[v]; s < sample_begin_[v + 1]; ++s) {
+        const double r = dot(&features_[s * q], x, q) - labels_[s];
+        f += r * r;
+      }
+      return f;
+    }
   }
   return 0;
 }
@@ -114,6 +123,17 @@ void LocalObjectives::gradient(LocalId v, const double* x, double* g) const {
         const double* a = &features_[s * q];
         const double y = labels_[s];
         const double w = -y * sigmoid(-y * dot(a, x, q));
+        for (int k = 0; k < q; ++k) g[k] += w * a[k];
+      }
+      return;
+    }
+    case Family::kLeastSquares: {
+      const double reg = lambda_ / static_cast<double>(n_global_);
+      for (int k = 0; k < q; ++k) g[k] = reg * x[k];
+      // d/dx (a.x - b)^2 = 2 (a.x - b) a
+      for (std::int64_t s = sample_begin_[v]; s < sample_begin_[v + 1]; ++s) {
+        const double* a = &features_[s * q];
+        const double w = 2.0 * (dot(a, x, q) - labels_[s]);
         for (int k = 0; k < q; ++k) g[k] += w * a[k];
       }
       return;
@@ -146,6 +166,19 @@ void LocalObjectives::hessian(LocalId v, const double* x, double* h) const {
           for (int k = i; k < q; ++k) h[i * q + k] += w * a[i] * a[k];
       }
       for (int i = 0; i < q; ++i)  // mirrored, so that the matrix is exactly symmetric
+        for (int k = 0; k < i; ++k) h[i * q + k] = h[k * q + i];
+      return;
+    }
+    case Family::kLeastSquares: {
+      const double reg = lambda_ / static_cast<double>(n_global_);
+      for (int i = 0; i < q * q; ++i) h[i] = 0;
+      for (int k = 0; k < q; ++k) h[k * q + k] = reg;
+      for (std::int64_t s = sample_begin_[v]; s < sample_begin_[v + 1]; ++s) {  // 2 a a^T, independent of x
+        const double* a = &features_[s * q];
+        for (int i = 0; i < q; ++i)
+          for (int k = i; k < q; ++k) h[i * q + k] += 2.0 * a[i] * a[k];
+      }
+      for (int i = 0; i < q; ++i)
         for (int k = 0; k < i; ++k) h[i * q + k] = h[k * q + i];
       return;
     }

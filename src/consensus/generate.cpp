@@ -33,13 +33,13 @@ void GenerateOptions::validate() const {
     os << "--dim must be in [1, " << kMaxDim << "] (got " << dim << ")";
   } else if (family == Family::kExp && dim != 1) {
     os << "--dim must be 1 for family exp (got " << dim << ")";
-  } else if (family == Family::kLogistic && samples_per_node < 0) {
+  } else if (has_samples(family) && samples_per_node < 0) {
     os << "--samples-per-node must be >= 0 (got " << samples_per_node << ")";
-  } else if (family == Family::kLogistic &&
+  } else if (has_samples(family) &&
              static_cast<double>(samples_per_node) * static_cast<double>(nodes) * dim > 4e9) {
     os << "--samples-per-node " << samples_per_node << " with " << nodes << " nodes and dim " << dim
        << " would need more than 4e9 feature values";
-  } else if (family == Family::kLogistic && (!std::isfinite(lambda) || !(lambda > 0))) {
+  } else if (has_samples(family) && (!std::isfinite(lambda) || !(lambda > 0))) {
     os << "--lambda must be a finite number > 0 (got " << lambda << ")";
   }
   if (!os.str().empty()) throw Error(os.str());
@@ -292,6 +292,28 @@ void draw_logistic(ProblemData& d, const GenerateOptions& o) {
   }
 }
 
+/// least_squares: a true x ~ N(0, I_q); node p owns samples [p spn, (p+1) spn);
+/// features a_s ~ N(0, I_q); targets b_s = a_s.x_true + 0.1 N(0, 1).
+void draw_least_squares(ProblemData& d, const GenerateOptions& o) {
+  const auto q = static_cast<std::size_t>(d.dim);
+  const auto S = static_cast<std::size_t>(o.samples_per_node) * static_cast<std::size_t>(d.num_nodes);
+  std::vector<double> w(q);
+  for (std::size_t k = 0; k < q; ++k) w[k] = standard_normal(o.seed, kTrueWeights, k);
+  d.features.resize(S * q);
+  d.labels.resize(S);
+  d.owner.resize(S);
+  d.lambda = o.lambda;
+  for (std::size_t s = 0; s < S; ++s) {
+    double t = 0;
+    for (std::size_t k = 0; k < q; ++k) {
+      d.features[s * q + k] = standard_normal(o.seed, kFeatures, s * q + k);
+      t += w[k] * d.features[s * q + k];
+    }
+    d.labels[s] = t + 0.1 * standard_normal(o.seed, kLabels, s);
+    d.owner[s] = static_cast<GlobalId>(s / static_cast<std::size_t>(o.samples_per_node));
+  }
+}
+
 }  // namespace
 
 ProblemData generate_problem(const GenerateOptions& o) { return generate_problem(o, nullptr); }
@@ -333,6 +355,7 @@ ProblemData generate_problem(const GenerateOptions& o, GenerateReport* report) {
     case Family::kExp: draw_exp(d, o.seed); break;
     case Family::kQuadratic: draw_quadratic(d, o.seed); break;
     case Family::kLogistic: draw_logistic(d, o); break;
+    case Family::kLeastSquares: draw_least_squares(d, o); break;
   }
   if (report) *report = rep;
   return d;

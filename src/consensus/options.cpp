@@ -80,6 +80,11 @@ std::string SolveOptions::validate() const {
   if (dual && !is_newton(m)) return "--dual applies to newton-tree and newton-path only, not to " + who;
   if (max_iter && *max_iter < 0) return "--max-iter must be >= 0";
   if (tol && !(std::isfinite(*tol) && *tol >= 0)) return "--tol must be a finite number >= 0";
+  if (oracle_tol && !(std::isfinite(*oracle_tol) && *oracle_tol >= 0))
+    return "--oracle-tol must be a finite number >= 0";
+  if (oracle_tol && !is_baseline(m))
+    return "--oracle-tol (the error against the oracle x*) applies to subgradient and incremental only; " + who +
+           " stops on its Newton decrement (--tol)";
   if (dual_max_iter && *dual_max_iter < 1) return "--dual-max-iter must be >= 1";
   if (dual_tol && !(std::isfinite(*dual_tol) && *dual_tol > 0)) return "--dual-tol must be a finite number > 0";
   if (step && !(std::isfinite(*step) && *step > 0)) return "--step must be a finite number > 0";

@@ -19,6 +19,7 @@ const char* family_name(Family f) {
     case Family::kExp: return "exp";
     case Family::kQuadratic: return "quadratic";
     case Family::kLogistic: return "logistic";
+    case Family::kLeastSquares: return "least_squares";
   }
   return "?";
 }
@@ -27,7 +28,8 @@ Family parse_family(const std::string& s) {
   if (s == "exp") return Family::kExp;
   if (s == "quadratic") return Family::kQuadratic;
   if (s == "logistic") return Family::kLogistic;
-  throw Error("unknown family '" + s + "' (expected exp, quadratic or logistic)");
+  if (s == "least_squares") return Family::kLeastSquares;
+  throw Error("unknown family '" + s + "' (expected exp, quadratic, logistic or least_squares)");
 }
 
 namespace {
@@ -71,7 +73,17 @@ struct FamilySets {
 };
 const FamilySets kFamilySets[] = {{Family::kExp, {"exp_a", "exp_b", "exp_c", "exp_d"}},
                                   {Family::kQuadratic, {"quad_h", "quad_r"}},
-                                  {Family::kLogistic, {"features", "labels", "owner"}}};
+                                  {Family::kLogistic, {"features", "labels", "owner"}},
+                                  {Family::kLeastSquares, {"features", "labels", "owner"}}};
+
+/// Whether `name` is one of family f's own datasets.
+bool owns(Family f, const char* name) {
+  for (const auto& fs : kFamilySets)
+    if (fs.family == f)
+      for (const char* own : fs.names)
+        if (std::string(own) == name) return true;
+  return false;
+}
 
 /// Root attributes; fills num_nodes, dim, family (and lambda for logistic).
 void read_attributes(const H5File& f, ProblemData& d) {
@@ -94,12 +106,14 @@ void read_attributes(const H5File& f, ProblemData& d) {
   try {
     d.family = parse_family(fam);
   } catch (const Error&) {
-    throw Error(attr_where(f, "family") + " is '" + fam + "', expected 'exp', 'quadratic' or 'logistic'");
+    throw Error(attr_where(f, "family") + " is '" + fam +
+                "', expected 'exp', 'quadratic', 'logistic' or 'least_squares'");
   }
   if (d.family == Family::kExp && d.dim != 1)
     throw Error(attr_where(f, "dim") + " must be 1 for family 'exp' (f_p is scalar), got " + std::to_string(d.dim));
-  if (d.family == Family::kLogistic) {
-    if (!f.has_attr("lambda")) throw Error(attr_where(f, "lambda") + " is missing (required by family 'logistic')");
+  if (has_samples(d.family)) {
+    if (!f.has_attr("lambda"))
+      throw Error(attr_where(f, "lambda") + " is missing (required by family '" + family_name(d.family) + "')");
     d.lambda = f.attr_double("lambda");
   }
 }
@@ -110,7 +124,7 @@ void read_datasets(const H5File& f, ProblemData& d) {
   const std::string nq = "[num_nodes, dim] = [" + std::to_string(n) + ", " + std::to_string(q) + "]";
   for (const auto& fs : kFamilySets)
     for (const char* name : fs.names)
-      if (fs.family != d.family && f.has_dataset(name))
+      if (fs.family != d.family && !owns(d.family, name) && f.has_dataset(name))
         throw Error(f.path() + ": dataset '" + name + "' belongs to family '" + family_name(fs.family) +
                     "', but attribute 'family' is '" + family_name(d.family) + "'");
 
@@ -128,6 +142,7 @@ void read_datasets(const H5File& f, ProblemData& d) {
       required_shape(f, "quad_r", {n, q}, nq);
       break;
     case Family::kLogistic:
+    case Family::kLeastSquares:
       S = required_shape(f, "labels", {0}, "[S]")[0];
       required_shape(f, "features", {S, q}, "[S, dim] = [" + std::to_string(S) + ", " + std::to_string(q) + "] (S = rows of labels)");
       required_shape(f, "owner", {S}, "[S] = [" + std::to_string(S) + "] (S = rows of labels)");
@@ -148,6 +163,7 @@ void read_datasets(const H5File& f, ProblemData& d) {
       d.quad_r = f.read_rows_double("quad_r", 0, n);
       break;
     case Family::kLogistic:
+    case Family::kLeastSquares:
       d.labels = f.read_rows_double("labels", 0, S);
       d.features = f.read_rows_double("features", 0, S);
       d.owner = f.read_rows_int("owner", 0, S);
@@ -178,7 +194,7 @@ void write_serial(const std::string& path, const ProblemData& d) {
   f.set_attr("num_nodes", std::int64_t{d.num_nodes});
   f.set_attr("dim", std::int64_t{d.dim});
   f.set_attr("family", std::string(family_name(d.family)));
-  if (d.family == Family::kLogistic) f.set_attr("lambda", d.lambda);
+  if (has_samples(d.family)) f.set_attr("lambda", d.lambda);
   const std::uint64_t E = d.edges.size() / 2;
   f.write_rows("edges", E, 2, 0, d.edges.data(), E);
   if (!d.truth_path.empty()) f.write_rows("truth_path", d.truth_path.size(), 0, 0, d.truth_path.data(), d.truth_path.size());
@@ -190,9 +206,10 @@ void write_serial(const std::string& path, const ProblemData& d) {
   if (own(Family::kExp, !d.exp_d.empty())) write_vector(f, "exp_d", d.exp_d, 0);
   if (own(Family::kQuadratic, !d.quad_h.empty())) write_vector(f, "quad_h", d.quad_h, q);
   if (own(Family::kQuadratic, !d.quad_r.empty())) write_vector(f, "quad_r", d.quad_r, q);
-  if (own(Family::kLogistic, !d.features.empty())) write_vector(f, "features", d.features, q);
-  if (own(Family::kLogistic, !d.labels.empty())) write_vector(f, "labels", d.labels, 0);
-  if (own(Family::kLogistic, !d.owner.empty())) f.write_rows("owner", d.owner.size(), 0, 0, d.owner.data(), d.owner.size());
+  const bool samples = has_samples(d.family);
+  if (samples || !d.features.empty()) write_vector(f, "features", d.features, q);
+  if (samples || !d.labels.empty()) write_vector(f, "labels", d.labels, 0);
+  if (samples || !d.owner.empty()) f.write_rows("owner", d.owner.size(), 0, 0, d.owner.data(), d.owner.size());
   f.commit();
 }
 

@@ -126,7 +126,8 @@ std::string check_quadratic(const ProblemData& d) {
   return check_values("quad_r", d.quad_r, d.dim, false);
 }
 
-std::string check_logistic(const ProblemData& d) {
+/// logistic and least_squares: samples (features, labels, owner) and lambda.
+std::string check_samples(const ProblemData& d) {
   const auto S = static_cast<std::uint64_t>(d.labels.size());
   if (auto m = check_size("features", d.features.size(), S * static_cast<std::uint64_t>(d.dim),
                           "rows of labels * dim");
@@ -134,9 +135,13 @@ std::string check_logistic(const ProblemData& d) {
     return m;
   if (auto m = check_size("owner", d.owner.size(), S, "rows of labels"); !m.empty()) return m;
   if (auto m = check_values("features", d.features, d.dim, false); !m.empty()) return m;
-  for (std::size_t k = 0; k < d.labels.size(); ++k)
-    if (d.labels[k] != 1.0 && d.labels[k] != -1.0)
-      return row_of("labels", static_cast<GlobalId>(k)) + num(d.labels[k]) + " is not +1 or -1";
+  if (d.family == Family::kLogistic) {
+    for (std::size_t k = 0; k < d.labels.size(); ++k)
+      if (d.labels[k] != 1.0 && d.labels[k] != -1.0)
+        return row_of("labels", static_cast<GlobalId>(k)) + num(d.labels[k]) + " is not +1 or -1";
+  } else if (auto m = check_values("labels", d.labels, 1, false); !m.empty()) {
+    return m;  // least_squares: targets b_s, any finite real
+  }
   for (std::size_t k = 0; k < d.owner.size(); ++k)
     if (d.owner[k] < 0 || d.owner[k] >= d.num_nodes)
       return row_of("owner", static_cast<GlobalId>(k)) + "node id " + s(d.owner[k]) + " " + range_text(d.num_nodes);
@@ -150,7 +155,7 @@ std::string check_logistic(const ProblemData& d) {
 std::string check_foreign(const ProblemData& d) {
   const std::string fam = family_name(d.family);
   const auto foreign = [&](const char* name, bool present, Family owner) -> std::string {
-    if (!present || owner == d.family) return {};
+    if (!present || owner == d.family || (has_samples(owner) && has_samples(d.family))) return {};
     return std::string("dataset '") + name + "' belongs to family '" + family_name(owner) +
            "', but this problem's family is '" + fam + "'";
   };
@@ -170,7 +175,8 @@ std::string check_family(const ProblemData& d) {
   switch (d.family) {
     case Family::kExp: return check_exp(d);
     case Family::kQuadratic: return check_quadratic(d);
-    case Family::kLogistic: return check_logistic(d);
+    case Family::kLogistic:
+    case Family::kLeastSquares: return check_samples(d);
   }
   return "unknown family";
 }
@@ -247,8 +253,10 @@ std::string check_finite_at_zero(const ProblemData& d) {
   const int q = d.dim;
   const std::vector<double> zero(q, 0.0);
   std::vector<double> g(q), h(static_cast<std::size_t>(q) * q);
-  const char* data = d.family == Family::kExp ? "exp_a..exp_d" : d.family == Family::kQuadratic ? "quad_h, quad_r"
-                                                                                                  : "features";
+  const char* data = d.family == Family::kExp         ? "exp_a..exp_d"
+                     : d.family == Family::kQuadratic ? "quad_h, quad_r"
+                     : d.family == Family::kLogistic  ? "features"
+                                                      : "features, labels";
   const GlobalId chunk = 65536;  // the nodes' data copied a chunk at a time
   LocalObjectives obj;
   std::vector<GlobalId> ids;

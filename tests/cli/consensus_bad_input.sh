@@ -173,7 +173,8 @@ for entry in "${gen_bad[@]}"; do
 done
 solve_bad=("--method foo|--method" "--dual foo|--dual" "--max-iter -1|--max-iter" "--tol -1|--tol" "--bogus|--bogus"
   "--step wolfe|--step" "--damping 0.5|--damping" "--step damped --damping 1|--damping"
-  "--method subgradient --step armijo|--step" "--step 0.5|--step")
+  "--method subgradient --step armijo|--step" "--step 0.5|--step" "--oracle-tol 1e-3|--oracle-tol"
+  "--method subgradient --oracle-tol -1|--oracle-tol")
 for entry in "${solve_bad[@]}"; do
   for np in 1 3; do
     printf '%s\t%s\tany\t%s\tconsensus solve %s -o %s %s -q\n' "solve ${entry%|*} np=$np" "${entry#*|}" "$np" \

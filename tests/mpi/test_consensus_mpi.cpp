@@ -233,7 +233,8 @@ struct DualCase {
 };
 
 TEST(ConsensusNewton, ExactDualSolvesTheDenseSystemAndSplittingConvergesToIt) {
-  for (const DualCase c : {DualCase{Family::kExp, 1}, DualCase{Family::kQuadratic, 2}, DualCase{Family::kLogistic, 3}}) {
+  for (const DualCase c : {DualCase{Family::kExp, 1}, DualCase{Family::kQuadratic, 2}, DualCase{Family::kLogistic, 3},
+                           DualCase{Family::kLeastSquares, 2}}) {
     const ProblemData d = make_problem(40, 7, c.family, c.dim);
     std::vector<GlobalId> parent;
     std::vector<int> level;
@@ -316,7 +317,7 @@ double max_diff(const std::vector<double>& a, const std::vector<double>& b) {
 // samples per node) the old 200 damped steps were 47% off.
 TEST(ConsensusReference, ConvergesToTheSerialTwinsOptimumOnEveryFamily) {
   const ProblemData cases[] = {make_problem(300, 11, Family::kExp, 1), make_problem(300, 12, Family::kQuadratic, 3),
-                               logistic(1000, 5, 200, 13)};
+                               logistic(1000, 5, 200, 13), make_problem(300, 14, Family::kLeastSquares, 4)};
   for (const ProblemData& d : cases) {
     const Optimum o = central_optimum(kWorld, d);
     const std::vector<double> twin = reference::consensus_optimum(d);
@@ -371,7 +372,7 @@ TEST(ConsensusNewton, DefaultsConvergeInAHandfulOfIterations) {
   EXPECT_GT(b.s.max_abs_error, 1e-3);
   EXPECT_EQ(b.s.line_search_trials, 0);
   for (const ProblemData& f : {make_problem(200, 16, Family::kExp, 1), make_problem(200, 17, Family::kQuadratic, 2),
-                               logistic(200, 3, 30, 18)})
+                               logistic(200, 3, 30, 18), make_problem(200, 19, Family::kLeastSquares, 3)})
     for (const char* dual : {"cg", "exact", "splitting", ""}) {
       SolveOptions m;
       if (*dual)
@@ -398,6 +399,7 @@ TEST(ConsensusDeterminism, BitIdenticalOnEveryNumberOfRanks) {
   const ProblemData d = make_problem(60, 5);
   const ProblemData dh = make_problem(60, 5, Family::kExp, 1, true);
   const ProblemData dl = make_problem(30, 6, Family::kLogistic, 2);
+  const ProblemData ds = make_problem(30, 8, Family::kLeastSquares, 2);
   struct Case {
     const char* method;
     const char* dual;
@@ -409,7 +411,8 @@ TEST(ConsensusDeterminism, BitIdenticalOnEveryNumberOfRanks) {
                         {"incremental", nullptr, &d},   {"incremental", nullptr, &dh},
                         {"central", nullptr, &dl},     {"newton-tree", "exact", &dl},
                         {"newton-tree", "cg", &d},     {"newton-path", "cg", &dh},
-                        {"newton-tree", "cg", &dl}};
+                        {"newton-tree", "cg", &dl},     {"newton-tree", "cg", &ds},
+                        {"newton-tree", "splitting", &ds}, {"subgradient", nullptr, &ds}};
   const int size = comm_size(kWorld), rank = comm_rank(kWorld);
   for (const Case& c : cases) {
     SolveOptions o;
@@ -534,6 +537,73 @@ TEST(ConsensusOptions, RefusesWhatAMethodCannotHonour) {
   o.method = "subgradient";
   o.step_rule = "armijo";
   EXPECT_TRUE(bad(o));  // a baseline has no Newton step
+  o = SolveOptions();
+  o.oracle_tol = 1e-3;
+  EXPECT_NE(o.validate().find("--oracle-tol"), std::string::npos);  // Newton stops on its decrement
+  o.method = "incremental";
+  EXPECT_FALSE(bad(o));
+  o.oracle_tol = -1.0;
+  EXPECT_NE(o.validate().find("--oracle-tol"), std::string::npos);
+}
+
+// The baselines' two stopping rules. --tol: the running average's largest
+// change in one iteration, max_p |xhat_p(k) - xhat_p(k-1)| (each node knows its
+// own), checked against running averages rebuilt from the iterates of runs
+// cut at k = 1, 2, ...; --oracle-tol: the running average's error against x*.
+TEST(ConsensusBaselines, TolStopsOnTheRunningAveragesChangeAndOracleTolOnTheError) {
+  const ProblemData d = make_problem(30, 21, Family::kLeastSquares, 2);
+  const double T = 2e-3;
+  SolveOptions o;
+  o.method = "subgradient";
+  o.tol = T;
+  const Outcome r = run(kWorld, d, o);
+  ASSERT_TRUE(r.s.converged);
+  const std::int64_t K = r.s.iterations;
+  ASSERT_GT(K, 2);
+  ASSERT_LT(K, o.max_iterations());
+  // xhat(k) from the iterates x(1..k): runs of k iterations without a stopping rule.
+  std::vector<double> sum, prev_avg(r.x.size(), 0.0);
+  double change_k = 0, change_km1 = 0;
+  for (std::int64_t k = 1; k <= K; ++k) {
+    SolveOptions c;
+    c.method = "subgradient";
+    c.max_iter = k;
+    const Outcome a = run(kWorld, d, c);
+    if (comm_rank(kWorld) != 0) continue;
+    if (sum.empty()) sum.assign(a.x.size(), 0.0);
+    double change = 0;
+    for (std::size_t i = 0; i < a.x.size(); ++i) {
+      sum[i] += a.x[i];
+      change = std::max(change, std::fabs(sum[i] / double(k) - prev_avg[i]));
+      prev_avg[i] = sum[i] / double(k);
+    }
+    change_km1 = change_k;
+    change_k = change;
+  }
+  if (comm_rank(kWorld) == 0) {
+    EXPECT_LE(change_k, T * (1 + 1e-9)) << "stopped at " << K;
+    EXPECT_GT(change_km1, T * (1 - 1e-9)) << "should have stopped at " << K - 1;
+  }
+  // A smaller tol runs longer; incremental stops on its own running average too.
+  o.tol = T / 4;
+  EXPECT_GT(run(kWorld, d, o).s.iterations, K);
+  o.method = "incremental";
+  o.tol = T;
+  const Outcome inc = run(kWorld, d, o);
+  EXPECT_TRUE(inc.s.converged);
+  EXPECT_LT(inc.s.iterations, o.max_iterations());
+  // --oracle-tol: the first record whose running-average error is <= the tolerance ends the run.
+  for (const char* m : {"subgradient", "incremental"}) {
+    SolveOptions e;
+    e.method = m;
+    const double E = 0.5 * run(kWorld, d, [&] { SolveOptions f = e; f.max_iter = 20; return f; }()).s.history.back().avg_max_abs_error;
+    e.oracle_tol = E;
+    const Outcome s = run(kWorld, d, e);
+    ASSERT_TRUE(s.s.converged) << m;
+    const auto& h = s.s.history;
+    EXPECT_LE(h.back().avg_max_abs_error, E) << m;
+    for (std::size_t i = 0; i + 1 < h.size(); ++i) EXPECT_GT(h[i].avg_max_abs_error, E) << m << " record " << i;
+  }
 }
 
 TEST(ConsensusOptions, RefusesBadProblemsOnEveryRank) {

@@ -65,6 +65,25 @@ std::vector<double> consensus_optimum(const ProblemData& d) {
     }
     return x;
   }
+  if (d.family == Family::kLeastSquares) {
+    // Normal equations of sum_s (a_s.x - b_s)^2 + lambda/2 x.x (n nodes of lambda/2n each):
+    // (2 sum_s a_s a_s^T + lambda I) x = 2 sum_s b_s a_s, accumulated and solved in long double.
+    using MatL = Eigen::Matrix<LD, Eigen::Dynamic, Eigen::Dynamic>;
+    using VecL = Eigen::Matrix<LD, Eigen::Dynamic, 1>;
+    MatL H = MatL::Identity(q, q) * LD(d.lambda);
+    VecL r = VecL::Zero(q);
+    for (std::int64_t s = 0; s < d.num_samples(); ++s) {
+      const double* a = &d.features[static_cast<std::size_t>(s) * q];
+      for (int k = 0; k < q; ++k) {
+        r(k) += 2 * LD(d.labels[s]) * a[k];
+        for (int j = 0; j < q; ++j) H(k, j) += 2 * LD(a[k]) * a[j];
+      }
+    }
+    const VecL x = H.ldlt().solve(r);
+    std::vector<double> out(q);
+    for (int k = 0; k < q; ++k) out[k] = static_cast<double>(x(k));
+    return out;
+  }
   std::vector<LD> x(q, 0), g, h, trial(q);
   LD prev = INFINITY;
   for (int it = 0; it < 200; ++it) {

@@ -1,7 +1,7 @@
 #pragma once
 // Reference twin of the consensus optimum: x* = argmin sum_p f_p(x) computed
 // serially from the problem's arrays with its own formulas (closed form for
-// the quadratic family, Newton in long double otherwise), for the tests to
+// the quadratic and least-squares families, Newton in long double otherwise), for the tests to
 // compare central_optimum and the distributed methods against.
 #include <vector>
 

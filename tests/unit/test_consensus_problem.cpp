@@ -93,6 +93,10 @@ TEST(ConsensusObjectives, LogisticMatchesFiniteDifferences) {
   check_derivatives(generate_problem(small(Family::kLogistic, 3)), 1.0);
 }
 
+TEST(ConsensusObjectives, LeastSquaresMatchesFiniteDifferences) {
+  check_derivatives(generate_problem(small(Family::kLeastSquares, 3)), 1.0);
+}
+
 TEST(ConsensusObjectives, ValuesFollowTheFormulas) {
   ProblemData d = generate_problem(small(Family::kExp, 1, 4));
   const LocalObjectives e(d, {2});
@@ -115,6 +119,23 @@ TEST(ConsensusObjectives, ValuesFollowTheFormulas) {
     if (d.owner[s] == 1)
       want += std::log(1 + std::exp(-d.labels[s] * (d.features[2 * s] * y[0] + d.features[2 * s + 1] * y[1])));
   EXPECT_NEAR(lg.value(0, y), want, 1e-12 * std::abs(want));
+
+  // Least squares: sum over node 1's samples of (a.x - b)^2 + lambda/2n x.x, and its gradient.
+  d = generate_problem(small(Family::kLeastSquares, 2, 4));
+  std::reverse(d.owner.begin(), d.owner.end());
+  const LocalObjectives ls(d, {1});
+  want = 0.5 * d.lambda / 4.0 * (y[0] * y[0] + y[1] * y[1]);
+  double gwant[2] = {d.lambda / 4.0 * y[0], d.lambda / 4.0 * y[1]};
+  for (std::size_t s = 0; s < d.owner.size(); ++s)
+    if (d.owner[s] == 1) {
+      const double r = d.features[2 * s] * y[0] + d.features[2 * s + 1] * y[1] - d.labels[s];
+      want += r * r;
+      for (int k = 0; k < 2; ++k) gwant[k] += 2 * r * d.features[2 * s + k];
+    }
+  EXPECT_NEAR(ls.value(0, y), want, 1e-12 * std::abs(want));
+  double g[2];
+  ls.gradient(0, y, g);
+  for (int k = 0; k < 2; ++k) EXPECT_NEAR(g[k], gwant[k], 1e-12 * (1 + std::abs(gwant[k])));
 }
 
 TEST(ConsensusObjectives, LogisticIsStableForLargeMargins) {
@@ -152,7 +173,7 @@ void expect_same(const ProblemData& a, const ProblemData& b) {
 }
 
 TEST(ConsensusFile, RoundTripEveryFamily) {
-  for (Family f : {Family::kExp, Family::kQuadratic, Family::kLogistic}) {
+  for (Family f : {Family::kExp, Family::kQuadratic, Family::kLogistic, Family::kLeastSquares}) {
     GenerateOptions o = small(f, f == Family::kExp ? 1 : 3);
     o.hamiltonian = f != Family::kQuadratic;
     const ProblemData d = generate_problem(o);
@@ -163,7 +184,8 @@ TEST(ConsensusFile, RoundTripEveryFamily) {
 }
 
 TEST(ConsensusFile, FamilyNames) {
-  for (Family f : {Family::kExp, Family::kQuadratic, Family::kLogistic}) EXPECT_EQ(parse_family(family_name(f)), f);
+  for (Family f : {Family::kExp, Family::kQuadratic, Family::kLogistic, Family::kLeastSquares})
+    EXPECT_EQ(parse_family(family_name(f)), f);
   EXPECT_NE(error_of([] { parse_family("cubic"); }).find("cubic"), std::string::npos);
 }
 
@@ -183,7 +205,7 @@ void expect_refused(const ProblemData& d, const std::string& name, const std::st
 }
 
 TEST(ConsensusValidate, GeneratedProblemsAreValid) {
-  for (Family f : {Family::kExp, Family::kQuadratic, Family::kLogistic})
+  for (Family f : {Family::kExp, Family::kQuadratic, Family::kLogistic, Family::kLeastSquares})
     EXPECT_EQ(validation_error(good(f, f == Family::kExp ? 1 : 2)), "");
 }
 
@@ -290,6 +312,34 @@ TEST(ConsensusValidate, LogisticLabelsOwnersFeaturesLambda) {
     d.lambda = lambda;
     expect_refused(d, "lambda");
   }
+}
+
+TEST(ConsensusValidate, LeastSquaresTargetsOwnersFeaturesLambda) {
+  ProblemData d = good(Family::kLeastSquares, 2);
+  d.labels[4] = 0.5;  // any finite target is fine
+  d.labels[5] = -1e3;
+  EXPECT_EQ(validation_error(d), "");
+  for (double bad : {double(NAN), double(INFINITY)}) {
+    d.labels[4] = bad;
+    expect_refused(d, "labels", "row 4");
+  }
+  d = good(Family::kLeastSquares, 2);
+  d.owner[9] = 12;
+  expect_refused(d, "owner", "row 9");
+  d = good(Family::kLeastSquares, 2);
+  d.features[2 * 6 + 1] = std::nan("");
+  expect_refused(d, "features", "row 6");
+  for (double lambda : {0.0, -1.0, double(NAN), double(INFINITY)}) {
+    d = good(Family::kLeastSquares, 2);
+    d.lambda = lambda;
+    expect_refused(d, "lambda");
+  }
+  d = good(Family::kLeastSquares, 2);
+  d.labels[3] = 1e200;  // finite, but (a.x - b)^2 at x = 0 overflows
+  EXPECT_NE(validation_error(d).find("overflows"), std::string::npos) << validation_error(d);
+  d = good(Family::kLeastSquares, 2);
+  d.quad_h.assign(24, 1.0);
+  expect_refused(d, "quad_h", "family");
 }
 
 TEST(ConsensusValidate, DataOfAnotherFamily) {
@@ -565,6 +615,12 @@ TEST(ConsensusGenerate, FamilyParametersInTheirDocumentedRanges) {
   const double pos = static_cast<double>(std::count(l.labels.begin(), l.labels.end(), 1.0));
   EXPECT_GT(pos, 25.0);
   EXPECT_LT(pos, 225.0);
+  // Least squares: the same ownership; targets a.x_true + small noise, so not labels of +-1.
+  const ProblemData ls = generate_problem(small(Family::kLeastSquares, 3, 50));
+  EXPECT_EQ(ls.num_samples(), 250);
+  for (std::int64_t s = 0; s < ls.num_samples(); ++s) ASSERT_EQ(ls.owner[s], s / 5);
+  EXPECT_LT(std::count(ls.labels.begin(), ls.labels.end(), 1.0) + std::count(ls.labels.begin(), ls.labels.end(), -1.0),
+            5);
 }
 
 TEST(ConsensusGenerate, OptionsAreChecked) {
@@ -581,6 +637,8 @@ TEST(ConsensusGenerate, OptionsAreChecked) {
   refused([](GenerateOptions& o) { o.family = Family::kQuadratic, o.dim = 0; }, "--dim");
   refused([](GenerateOptions& o) { o.family = Family::kLogistic, o.lambda = 0; }, "--lambda");
   refused([](GenerateOptions& o) { o.family = Family::kLogistic, o.samples_per_node = -1; }, "--samples-per-node");
+  refused([](GenerateOptions& o) { o.family = Family::kLeastSquares, o.lambda = 0; }, "--lambda");
+  refused([](GenerateOptions& o) { o.family = Family::kLeastSquares, o.samples_per_node = -1; }, "--samples-per-node");
   EXPECT_EQ(error_of([] { GenerateOptions().validate(); }), "");
 }
 

@@ -22,6 +22,23 @@ struct ConsensusGenerateCommand {
 /// only on success). Throws snl::Error (identical on every rank) on failure.
 void run_consensus_generate(const ConsensusGenerateCommand& cmd, MPI_Comm comm);
 
+// ---- import (problem side) ----
+struct ConsensusImportCommand {
+  std::string samples;       ///< CSV: header, then node id, features, label (or target) per row
+  std::string edges;         ///< CSV: two node ids per row (header optional)
+  std::string output;
+  std::string family;        ///< logistic | least_squares
+  double lambda = 1.0;       ///< > 0
+  GlobalId nodes = 0;        ///< n; 0: the largest node id in either file + 1
+  std::string node_column;   ///< header name of the node id column ("": the first)
+  std::string label_column;  ///< header name of the label column ("": the last)
+  bool quiet = false;
+};
+/// Builds a problem file from the two CSV files and writes it atomically. Throws
+/// snl::UsageError for options that cannot be honoured (exit 2) and snl::Error
+/// naming the file and line for bad data (exit 1); identical on every rank.
+void run_consensus_import(const ConsensusImportCommand& cmd, MPI_Comm comm);
+
 // ---- solve (solver side) ----
 struct ConsensusSolveCommand {
   std::string problem;

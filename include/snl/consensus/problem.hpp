@@ -14,8 +14,10 @@
 
 namespace snl::consensus {
 
-enum class Family { kExp, kQuadratic, kLogistic };
-const char* family_name(Family f);          ///< "exp" | "quadratic" | "logistic"
+enum class Family { kExp, kQuadratic, kLogistic, kLeastSquares };
+const char* family_name(Family f);          ///< "exp" | "quadratic" | "logistic" | "least_squares"
+/// Families whose data are samples (features, labels, owner) and lambda.
+inline bool has_samples(Family f) { return f == Family::kLogistic || f == Family::kLeastSquares; }
 Family parse_family(const std::string& s);  ///< throws snl::Error on anything else
 
 /// Everything a problem file holds, in file order (node ids 0..n-1).
@@ -31,9 +33,11 @@ struct ProblemData {
   std::vector<double> quad_h, quad_r;  ///< [n*q] row-major, h > 0
   // family logistic: f_p(x) = sum_{s: owner_s = p} log(1 + e^(-y_s a_s.x)) + (lambda / 2n) x.x
   std::vector<double> features;   ///< [S*q] row-major
-  std::vector<double> labels;     ///< [S], each +1 or -1
+  std::vector<double> labels;     ///< [S], each +1 or -1 (logistic), finite (least_squares)
   std::vector<GlobalId> owner;    ///< [S], node ids in [0, n)
-  double lambda = 0.0;            ///< > 0
+  // family least_squares: f_p(x) = sum_{s: owner_s = p} (a_s.x - b_s)^2 + (lambda / 2n) x.x,
+  // the same datasets with labels[s] = b_s (any finite real)
+  double lambda = 0.0;            ///< > 0 (logistic, least_squares)
   std::int64_t num_samples() const { return static_cast<std::int64_t>(labels.size()); }
 };
 
@@ -57,8 +61,8 @@ struct GenerateOptions {
   int dim = 1;                  ///< q; must be 1 for exp
   bool hamiltonian = false;     ///< plant a Hamilton path (stored in truth_path)
   std::uint64_t seed = 1;
-  std::int64_t samples_per_node = 20;  ///< logistic
-  double lambda = 1.0;                 ///< logistic
+  std::int64_t samples_per_node = 20;  ///< logistic, least_squares
+  double lambda = 1.0;                 ///< logistic, least_squares
   void validate() const;               ///< throws snl::Error
 };
 /// Random geometric graph in the unit square with the requested average degree,
@@ -96,7 +100,7 @@ class LocalObjectives {
   double lambda_ = 0.0;
   std::vector<GlobalId> nodes_;
   std::vector<double> p0_, p1_, p2_, p3_;          // exp a, b, c, d or quadratic h, r (per node)
-  std::vector<std::int64_t> sample_begin_;          // logistic: [size+1] into features_/labels_
+  std::vector<std::int64_t> sample_begin_;          // logistic, least_squares: [size+1] into features_/labels_
   std::vector<double> features_, labels_;
 };
 

@@ -33,8 +33,11 @@ struct SolveOptions {
   std::optional<std::string> dual;          ///< cg|splitting|exact (Newton only); default cg
   std::optional<std::int64_t> max_iter;     ///< primal iterations; default 100 (Newton, central), 1000 (baselines)
   std::optional<std::int64_t> dual_max_iter;  ///< dual iterations per Newton step (cg, splitting); default 10000
-  std::optional<double> tol;       ///< Newton, central: decrement theta <= tol (default 1e-10); baselines: error of
-                                   ///< the running average <= tol (default 0: run max_iter iterations)
+  std::optional<double> tol;       ///< Newton, central: decrement theta <= tol (default 1e-10); baselines: the
+                                   ///< running average's largest change in one iteration, max_p |xhat_p(k) -
+                                   ///< xhat_p(k-1)|, <= tol (a rule the nodes can apply; default 0: run max_iter)
+  std::optional<double> oracle_tol;  ///< baselines: error of the running average against the oracle x* <= oracle_tol
+                                     ///< (no node knows x*: a yardstick for experiments; default 0: off)
   std::optional<double> dual_tol;  ///< splitting ends when max|w(t+1) - w(t)| <= dual_tol max|w(t+1)|; cg: the
                                    ///< floor of its forcing term (||r|| <= max(dual_tol, min(0.1, theta_prev)) ||rhs||);
                                    ///< default 1e-12
