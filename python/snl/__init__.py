@@ -295,3 +295,6 @@ def crlb(net, sigma=None, at=None):
     cov = d["covariance"]
     cov[np.asarray(d["outside"], dtype=np.int64)] = np.nan
     return cov
+
+
+from . import consensus  # noqa: E402,F401  (snl.consensus: seed 001 from Python)

@@ -19,6 +19,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "binding_util.hpp"
 #include "io/text_table.hpp"
 #include "snl/core/mpi_util.hpp"
 #include "snl/io/network.hpp"
@@ -35,41 +36,13 @@ namespace py = pybind11;
 namespace {
 
 using snl::GlobalId;
+using snl_py::Arr;
+using snl_py::bcast_vec;
+using snl_py::to_array;
+using snl_py::to_comm;
+using snl_py::to_vec;
 
 bool g_owns_mpi = false;  // MPI_Init was ours: finalize at exit
-
-// An mpi4py handle (an int) as the MPI's handle type: a pointer (Open MPI) or an int (MPICH).
-template <class C>
-C comm_from_handle(std::uintptr_t h) {
-  if constexpr (std::is_pointer_v<C>)
-    return reinterpret_cast<C>(h);
-  else
-    return static_cast<C>(h);
-}
-
-// A communicator from its mpi4py handle; None: MPI_COMM_WORLD.
-MPI_Comm to_comm(const py::object& handle) {
-  if (handle.is_none()) return MPI_COMM_WORLD;
-  return comm_from_handle<MPI_Comm>(handle.cast<std::uintptr_t>());
-}
-
-template <class T>
-using Arr = py::array_t<T, py::array::c_style | py::array::forcecast>;
-
-template <class T>
-std::vector<T> to_vec(const py::object& o) {
-  if (o.is_none()) return {};
-  const Arr<T> a = Arr<T>::ensure(o);
-  if (!a) throw py::value_error("expected a numeric array");
-  return std::vector<T>(a.data(), a.data() + a.size());
-}
-
-template <class T>
-py::array_t<T> to_array(const std::vector<T>& v, std::vector<py::ssize_t> shape) {
-  py::array_t<T> a(shape);
-  if (!v.empty()) std::memcpy(a.mutable_data(), v.data(), v.size() * sizeof(T));
-  return a;
-}
 
 // A whole network on the calling process.
 struct PyNetwork {
@@ -77,14 +50,6 @@ struct PyNetwork {
 };
 
 // Whole network broadcast from rank 0 (the other ranks' copies are replaced).
-template <class T>
-void bcast_vec(MPI_Comm comm, std::vector<T>& v) {
-  std::int64_t n = static_cast<std::int64_t>(v.size());
-  snl::bcast_bytes(comm, &n, sizeof n);
-  v.resize(static_cast<std::size_t>(n));
-  if (n > 0) snl::bcast_bytes(comm, v.data(), v.size() * sizeof(T));
-}
-
 void bcast_network(MPI_Comm comm, snl::Network& w) {
   std::int64_t head[5] = {w.dim, w.num_sensors, w.has_truth, w.sigma.has_value(), 0};
   double sigma = w.sigma.value_or(0.0);
@@ -789,4 +754,5 @@ PYBIND11_MODULE(_snl, m) {
   m.def("solve", &solve);
   m.def("evaluate", &evaluate);
   m.def("crlb", &crlb);
+  snl_py::add_consensus(m);
 }
