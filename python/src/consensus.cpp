@@ -216,24 +216,17 @@ py::dict solve(const PyProblem* problem, const py::dict& kw, const py::object& c
   sum["x_star"] = to_array(s.x_star, {static_cast<py::ssize_t>(s.x_star.size())});
   sum["x_star_converged"] = s.x_star_converged;
   py::dict hist;
-  auto column = [&](const char* name, auto get) {
-    std::vector<double> v;
-    for (const auto& r : s.history) v.push_back(get(r));
+  auto column = [&](const char* name, const std::vector<double>& v) {
     hist[name] = to_array(v, {static_cast<py::ssize_t>(v.size())});
   };
-  using R = sc::HistoryRecord;
-  column("iteration", [](const R& r) { return double(r.iteration); });
-  column("dual_iterations", [](const R& r) { return double(r.dual_iterations); });
-  column("line_search_trials", [](const R& r) { return double(r.line_search_trials); });
-  column("F", [](const R& r) { return r.objective; });
-  column("max_abs_error", [](const R& r) { return r.max_abs_error; });
-  column("messages_per_node", [](const R& r) { return r.messages; });
-  column("reals_per_node", [](const R& r) { return r.reals; });
-  column("F_running_average", [](const R& r) { return r.avg_objective; });
-  column("max_abs_error_running_average", [](const R& r) { return r.avg_max_abs_error; });
-  column("decrement", [](const R& r) { return r.decrement; });
-  column("step", [](const R& r) { return r.step; });
-  column("elapsed", [](const R& r) { return r.elapsed; });
+  for (const sc::HistoryColumn& c : sc::history_columns()) {
+    std::vector<double> v;
+    for (const auto& r : s.history) v.push_back(c.get(r));
+    column(c.name, v);
+  }
+  std::vector<double> elapsed;
+  for (const auto& r : s.history) elapsed.push_back(r.elapsed);
+  column("elapsed", elapsed);
   py::dict out;
   out["x"] = to_array(x, {static_cast<py::ssize_t>(n), q});
   out["summary"] = sum;

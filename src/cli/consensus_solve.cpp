@@ -73,23 +73,11 @@ void write_consensus_result(const ConsensusSolveCommand& cmd, MPI_Comm comm, con
   const bool root = comm_rank(comm) == 0;
   f.write_rows("x", static_cast<std::uint64_t>(d.num_nodes), static_cast<std::uint64_t>(d.dim), 0, x_rows.data(),
                root ? static_cast<std::uint64_t>(d.num_nodes) : 0);
-  auto column = [&](const char* name, auto get) {
+  for (const consensus::HistoryColumn& c : consensus::history_columns()) {
     std::vector<double> v;
-    for (const auto& r : s.history) v.push_back(get(r));
-    f.write_replicated(std::string("history/") + name, v);
-  };
-  using R = consensus::HistoryRecord;
-  column("iteration", [](const R& r) { return double(r.iteration); });
-  column("dual_iterations", [](const R& r) { return double(r.dual_iterations); });
-  column("line_search_trials", [](const R& r) { return double(r.line_search_trials); });
-  column("F", [](const R& r) { return r.objective; });
-  column("max_abs_error", [](const R& r) { return r.max_abs_error; });
-  column("messages_per_node", [](const R& r) { return r.messages; });
-  column("reals_per_node", [](const R& r) { return r.reals; });
-  column("F_running_average", [](const R& r) { return r.avg_objective; });
-  column("max_abs_error_running_average", [](const R& r) { return r.avg_max_abs_error; });
-  column("decrement", [](const R& r) { return r.decrement; });
-  column("step", [](const R& r) { return r.step; });
+    for (const auto& r : s.history) v.push_back(c.get(r));
+    f.write_replicated(std::string("history/") + c.name, v);
+  }
   f.commit();
 }
 

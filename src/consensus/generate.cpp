@@ -268,10 +268,11 @@ void draw_quadratic(ProblemData& d, std::uint64_t seed) {
   }
 }
 
-/// logistic: a true weight w ~ N(0, I_q); node p owns samples
-/// [p spn, (p+1) spn); features a_s ~ N(0, I_q); y_s = +1 with probability
-/// sigmoid(w.a_s), else -1.
-void draw_logistic(ProblemData& d, const GenerateOptions& o) {
+/// logistic and least_squares: a true weight w ~ N(0, I_q); node p owns
+/// samples [p spn, (p+1) spn); features a_s ~ N(0, I_q). logistic: y_s = +1
+/// with probability sigmoid(w.a_s), else -1; least_squares: the target
+/// b_s = w.a_s + 0.1 N(0, 1).
+void draw_samples(ProblemData& d, const GenerateOptions& o) {
   const auto q = static_cast<std::size_t>(d.dim);
   const auto S = static_cast<std::size_t>(o.samples_per_node) * static_cast<std::size_t>(d.num_nodes);
   std::vector<double> w(q);
@@ -286,30 +287,10 @@ void draw_logistic(ProblemData& d, const GenerateOptions& o) {
       d.features[s * q + k] = standard_normal(o.seed, kFeatures, s * q + k);
       t += w[k] * d.features[s * q + k];
     }
-    const double prob = 1.0 / (1.0 + std::exp(-t));
-    d.labels[s] = uniform01(o.seed, kLabels, s) < prob ? 1.0 : -1.0;
-    d.owner[s] = static_cast<GlobalId>(s / static_cast<std::size_t>(o.samples_per_node));
-  }
-}
-
-/// least_squares: a true x ~ N(0, I_q); node p owns samples [p spn, (p+1) spn);
-/// features a_s ~ N(0, I_q); targets b_s = a_s.x_true + 0.1 N(0, 1).
-void draw_least_squares(ProblemData& d, const GenerateOptions& o) {
-  const auto q = static_cast<std::size_t>(d.dim);
-  const auto S = static_cast<std::size_t>(o.samples_per_node) * static_cast<std::size_t>(d.num_nodes);
-  std::vector<double> w(q);
-  for (std::size_t k = 0; k < q; ++k) w[k] = standard_normal(o.seed, kTrueWeights, k);
-  d.features.resize(S * q);
-  d.labels.resize(S);
-  d.owner.resize(S);
-  d.lambda = o.lambda;
-  for (std::size_t s = 0; s < S; ++s) {
-    double t = 0;
-    for (std::size_t k = 0; k < q; ++k) {
-      d.features[s * q + k] = standard_normal(o.seed, kFeatures, s * q + k);
-      t += w[k] * d.features[s * q + k];
-    }
-    d.labels[s] = t + 0.1 * standard_normal(o.seed, kLabels, s);
+    if (d.family == Family::kLogistic)
+      d.labels[s] = uniform01(o.seed, kLabels, s) < 1.0 / (1.0 + std::exp(-t)) ? 1.0 : -1.0;
+    else
+      d.labels[s] = t + 0.1 * standard_normal(o.seed, kLabels, s);
     d.owner[s] = static_cast<GlobalId>(s / static_cast<std::size_t>(o.samples_per_node));
   }
 }
@@ -354,8 +335,8 @@ ProblemData generate_problem(const GenerateOptions& o, GenerateReport* report) {
   switch (o.family) {
     case Family::kExp: draw_exp(d, o.seed); break;
     case Family::kQuadratic: draw_quadratic(d, o.seed); break;
-    case Family::kLogistic: draw_logistic(d, o); break;
-    case Family::kLeastSquares: draw_least_squares(d, o); break;
+    case Family::kLogistic:
+    case Family::kLeastSquares: draw_samples(d, o); break;
   }
   if (report) *report = rep;
   return d;

@@ -247,6 +247,23 @@ void finish(SolveSummary& s, std::int64_t k, const Counters& c, double n, const 
 
 }  // namespace
 
+const std::vector<HistoryColumn>& history_columns() {
+  using R = HistoryRecord;
+  static const std::vector<HistoryColumn> columns = {
+      {"iteration", [](const R& r) { return double(r.iteration); }},
+      {"dual_iterations", [](const R& r) { return double(r.dual_iterations); }},
+      {"line_search_trials", [](const R& r) { return double(r.line_search_trials); }},
+      {"F", [](const R& r) { return r.objective; }},
+      {"max_abs_error", [](const R& r) { return r.max_abs_error; }},
+      {"messages_per_node", [](const R& r) { return r.messages; }},
+      {"reals_per_node", [](const R& r) { return r.reals; }},
+      {"F_running_average", [](const R& r) { return r.avg_objective; }},
+      {"max_abs_error_running_average", [](const R& r) { return r.avg_max_abs_error; }},
+      {"decrement", [](const R& r) { return r.decrement; }},
+      {"step", [](const R& r) { return r.step; }}};
+  return columns;
+}
+
 SolveSummary solve(MPI_Comm comm, const ProblemData& data, const SolveOptions& opt,
                    const CheckpointSettings& ck, const RecordCallback& on_record, std::vector<double>* x_rows) {
   const std::string bad = opt.validate();

@@ -77,6 +77,14 @@ struct HistoryRecord {
   double elapsed = 0;                ///< seconds since the solve began
 };
 
+/// The history columns of a result (the file's history/ datasets, snl.consensus's
+/// history), in file order; each reads one field of a record as a double.
+struct HistoryColumn {
+  const char* name;
+  double (*get)(const HistoryRecord&);
+};
+const std::vector<HistoryColumn>& history_columns();
+
 struct SolveSummary {
   std::string method, dual, step_rule;
   std::int64_t iterations = 0, dual_iterations = 0, line_search_trials = 0;
