@@ -13,7 +13,7 @@ shift || true
 PKGS=(build-essential cmake ninja-build pkg-config openmpi-bin libopenmpi-dev libhdf5-openmpi-dev hdf5-tools
       libeigen3-dev libmetis-dev libscotchparmetis-dev libptscotch-dev libdsdp-dev libgtest-dev libgmock-dev libcli11-dev libbenchmark-dev
       python3-numpy python3-h5py python3-matplotlib clang libclang-rt-14-dev
-      python3-dev pybind11-dev python3-pybind11 python3-mpi4py python3-pytest
+      python3-dev pybind11-dev python3-pybind11 python3-mpi4py python3-pytest python3-scipy
       slurm-wlm munge gdb)
 missing=()
 for p in "${PKGS[@]}"; do

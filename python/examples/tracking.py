@@ -5,7 +5,7 @@ Sensors take a Gaussian random walk (reflected at the region's edges), anchors
 stay fixed; each frame's measurements are the pairs within the link radius,
 ranged with Gaussian noise. Prints, per frame, the time and RMSE of the warm
 and the cold solve.
-  python3 tracking.py [--sensors N] [--frames F] [--step S] [--warm-algorithm A] [--seed K]
+  python3 tracking.py [--sensors N] [--frames F] [--step S] [--warm-algorithm A] [--warm-tol T] [--seed K]
 Under mpirun every rank runs the same script; rank 0 prints."""
 import argparse
 import time
@@ -34,6 +34,9 @@ def main():
     ap.add_argument("--frames", type=int, default=10)
     ap.add_argument("--step", type=float, default=0.002, help="random-walk standard deviation per frame")
     ap.add_argument("--warm-algorithm", default="ml-agd", help="the warm frames' method (cold: the default)")
+    ap.add_argument("--warm-tol", type=float, default=None,
+                    help="--tol of the warm frames (default: the solver's; a frame starting near its answer "
+                         "can stop at a looser tolerance with the same RMSE)")
     ap.add_argument("--seed", type=int, default=1)
     a = ap.parse_args()
     root = snl.rank() == 0
@@ -46,7 +49,8 @@ def main():
     side = float(anchors.max())  # the region [0, side]^2: its corners are anchors
     if root:
         print(f"# {a.sensors} sensors, {len(anchors)} anchors, radius {radius:.4g}, sigma {sigma}, "
-              f"step {a.step}, {snl.size()} ranks; warm: {a.warm_algorithm} from the last frame, "
+              f"step {a.step}, {snl.size()} ranks; warm: {a.warm_algorithm} from the last frame"
+              f"{'' if a.warm_tol is None else f' (tol {a.warm_tol})'}, "
               f"cold: {snl.DEFAULT_ALGORITHM} from its own start")
         print(f"{'frame':>5} {'warm_s':>8} {'warm_iter':>9} {'warm_rmse':>10} {'cold_s':>8} {'cold_iter':>9} "
               f"{'cold_rmse':>10}")
@@ -63,7 +67,8 @@ def main():
         if prev is None:
             warm, t2 = cold, t1  # frame 0: nothing to start from
         else:
-            warm = snl.solve(net, algorithm=a.warm_algorithm, init=prev)
+            warm = snl.solve(net, algorithm=a.warm_algorithm, init=prev,
+                             **({} if a.warm_tol is None else {"tol": a.warm_tol}))
             t2 = time.perf_counter()
         prev = warm
         row = (t, t2 - t1 if t else t1 - t0, warm.summary["iterations"], warm.summary["rmse"], t1 - t0,

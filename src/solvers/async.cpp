@@ -1,19 +1,34 @@
 // The asynchronous method of 003 (Algorithm 2), run in parallel with exactly
 // its sequential semantics (so results are bit-identical for any rank count):
 // node activations xi_k drawn uniformly (eq. 21) from a counter-based
-// generator, so every rank knows the whole sequence. A prefix of activations in
-// which no node is activated twice and no two activated nodes are neighbours
-// commutes; the ranks agree on the longest such prefix (one MPI_Allreduce),
-// apply it in parallel, exchange the halo, and go on. Inexact version (async):
+// generator, so every rank knows the whole sequence. Inexact version (async):
 // one step x_i <- x_i - grad_i f_hat / L (eq. 20); exact version (async-exact):
 // minimise f_i(v) = sum_j 1/2 d_B(d_ij)(v - x_j)^2 + sum_k 1/2 d_B(r_ik)(v - a_k)^2
 // by Nesterov's method (Algorithm 3) with the spec's weight 1/2 (003's eq. 19
 // has 1/4, a slip) and L_i = delta_i + |A_i|.
 // One iteration = n activations (one message per activation: 1 per sensor).
+//
+// The replay (docs/design.md, "The asynchronous replay"): each rank lists the
+// activations of its local nodes (owned and ghost) among the iteration's n and
+// applies its own in passes over that list, in order, as a dataflow: an owned
+// activation at k runs once every earlier activation of the node and of its
+// neighbours is done (for a ghost neighbour: received, its row's version,
+// the position of its last activation applied, reaching that activation);
+// otherwise it waits and so do the later ones that touch it (the pass taints
+// the node). Between passes the ranks exchange, neighbour to neighbour, the
+// rows changed since the last exchange with their versions (DeltaHalo). An
+// activation thus reads exactly the rows it reads in the sequential order:
+// none is too old (every earlier activation it depends on is done) and none
+// too new (a later activation of a neighbour waits for this one, on whichever
+// rank it runs). The earliest activation not done can always run, so every
+// round makes progress; the rounds an iteration takes are the cross-rank
+// links of the longest chain of dependent activations, not the activations.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include "snl/core/random.hpp"
+#include "snl/graph/delta_halo.hpp"
 #include "snl/problem/metrics.hpp"
 #include "solvers/algorithm_util.hpp"
 #include "solvers/methods.hpp"
@@ -57,6 +72,70 @@ double local_cost_grad(const LocalizationProblem& prob, const double* x, LocalId
   return f;
 }
 
+// The gradient of f_i at v under the unweighted l2 model (eq. 20's step), the
+// terms of local_cost_grad without its cost and without a branch: a term
+// outside the disk adds a (v - c) as there; one inside adds +0.0, which leaves
+// the sum's bits as they are (the sum starts at +0.0 and so is never -0.0),
+// so the result is local_cost_grad's, bit for bit (tests/mpi/test_pm_async_mpi).
+template <int P>
+void l2_grad(const LocalizationProblem& prob, const double* x, LocalId i, const double* v, double* gout) {
+  const auto& gr = prob.graph();
+  const auto* adj = gr.adjacency().data();
+  const double* ev = gr.edge_values().data();
+  const std::int64_t w = gr.edge_width();
+  double g[P];
+  for (int k = 0; k < P; ++k) g[k] = 0;
+  // The terms of up to kChunk neighbours at a time: first each term on its
+  // own (no dependence between them, so the square roots and divisions
+  // overlap or go two to a vector), then their sum in slot order.
+  constexpr int kChunk = 16;
+  double d[P][kChunk], rho[kChunk], t[P][kChunk];
+  auto chunk = [&](int m) {
+    double nz[kChunk], a[kChunk];
+    for (int j = 0; j < m; ++j) {
+      double s = 0;
+      for (int k = 0; k < P; ++k) s += d[k][j] * d[k][j];
+      nz[j] = std::sqrt(s);
+    }
+    for (int j = 0; j < m; ++j) a[j] = 1.0 - rho[j] / nz[j];
+    // All bits of the term outside the disk, else +0.0 (a mask, not a branch).
+    for (int j = 0; j < m; ++j) {
+      const std::uint64_t mask = std::uint64_t(0) - std::uint64_t(nz[j] > rho[j]);
+      for (int k = 0; k < P; ++k) {
+        const double tv = a[j] * d[k][j];
+        std::uint64_t b;
+        std::memcpy(&b, &tv, sizeof b);
+        b &= mask;
+        std::memcpy(&t[k][j], &b, sizeof b);
+      }
+    }
+    for (int j = 0; j < m; ++j)
+      for (int k = 0; k < P; ++k) g[k] += t[k][j];
+  };
+  const auto e0 = gr.offsets()[i], e1 = gr.offsets()[i + 1];
+  for (auto e = e0; e < e1; e += kChunk) {
+    const int m = static_cast<int>(std::min<std::int64_t>(kChunk, e1 - e));
+    for (int j = 0; j < m; ++j) {
+      const double* c = x + std::size_t(adj[e + j]) * P;
+      for (int k = 0; k < P; ++k) d[k][j] = v[k] - c[k];
+      rho[j] = ev[(e + j) * w];
+    }
+    chunk(m);
+  }
+  const double* anc = prob.anchors().data();
+  const auto a0 = prob.anchor_offsets()[i], a1 = prob.anchor_offsets()[i + 1];
+  for (auto e = a0; e < a1; e += kChunk) {
+    const int m = static_cast<int>(std::min<std::int64_t>(kChunk, a1 - e));
+    for (int j = 0; j < m; ++j) {
+      const double* c = anc + std::size_t(prob.anchor_ids()[e + j]) * P;
+      for (int k = 0; k < P; ++k) d[k][j] = v[k] - c[k];
+      rho[j] = prob.anchor_ranges()[e + j];
+    }
+    chunk(m);
+  }
+  for (int k = 0; k < P; ++k) gout[k] = g[k];
+}
+
 // ---------------------------------------------------------------------------
 class Async final : public Algorithm {
  public:
@@ -72,53 +151,84 @@ class Async final : public Algorithm {
     x_ = with_ghosts(prob_, x0);
     auto& g = prob_.graph();
     g.halo().exchange(x_.data(), prob_.dim());
-    lookup_.resize(g.num_local());
-    for (LocalId v = 0; v < g.num_local(); ++v) lookup_[v] = {g.global_id(v), v};
-    std::sort(lookup_.begin(), lookup_.end());
-    stamp_.assign(g.num_local(), -1);
+    // Global id -> local id (-1: not local): 4 bytes per sensor on every rank,
+    // as every rank reads the whole activation sequence (n draws per iteration).
+    g2l_.assign(std::size_t(prob_.num_sensors()), -1);
+    for (LocalId v = 0; v < g.num_local(); ++v) g2l_[std::size_t(g.global_id(v))] = v;
+    version_.assign(std::size_t(g.num_local()), -1);
+    taint_.assign(std::size_t(g.num_local()), 0);
     prev_.assign(std::size_t(g.num_owned()) * prob_.dim(), 0.0);
+    delta_ = DeltaHalo(g.halo(), prob_.dim());
+    const std::size_t expect = std::size_t(g.num_local()) + std::size_t(g.num_local()) / 4 + 64;
+    acts_.clear();
+    acts_.reserve(expect);
     k_ = 0;
-    window_ = 64;
   }
 
   void iterate() override {
-    const int p = prob_.dim();
     auto& g = prob_.graph();
     const GlobalId n = prob_.num_sensors();
     std::copy(x_.begin(), x_.begin() + prev_.size(), prev_.begin());
     const std::int64_t round_end = k_ + n;
-    while (k_ < round_end) {
-      const std::int64_t start = k_;
-      const std::int64_t limit = std::min(round_end, start + window_);
-      // This rank's first conflicting activation in [start, limit).
-      long long mine = limit;
-      for (std::int64_t k = start; k < limit; ++k) {
-        const LocalId l = local_of(activation(k));
-        if (l < 0) continue;
-        if (l < g.num_owned()) {
-          bool conflict = stamp_[l] >= start && stamp_[l] < k;
-          for (auto e = g.offsets()[l]; e < g.offsets()[l + 1] && !conflict; ++e) {
-            const auto s = stamp_[g.adjacency()[e]];
-            conflict = s >= start && s < k;
-          }
-          if (conflict) {
-            mine = k;
-            break;
-          }
-        }
-        stamp_[l] = k;
-      }
-      long long end = 0;
-      MPI_Allreduce(&mine, &end, 1, MPI_LONG_LONG, MPI_MIN, prob_.comm());
-      // Apply the conflict-free prefix [start, end): the updates commute.
-      for (std::int64_t k = start; k < end; ++k) {
-        const LocalId l = local_of(activation(k));
-        if (l >= 0 && l < g.num_owned()) activate(l);
-      }
-      g.halo().exchange(x_.data(), p);
-      window_ = std::max<std::int64_t>(64, 2 * (end - start));
-      k_ = end;
+    // This iteration's activations of local nodes, in order.
+    acts_.clear();
+    for (std::int64_t k = k_; k < round_end; ++k) {
+      const LocalId l = g2l_[std::size_t(activation(k))];
+      if (l >= 0) acts_.push_back({k, l});
     }
+    delta_.reset(0, 1);
+    const LocalId n_owned = g.num_owned(), n_interior = g.num_interior();
+    const auto* off = g.offsets().data();
+    const auto* adj = g.adjacency().data();
+    // Passes over the activations not done, in order; each pass keeps (in
+    // place, at the front of acts_) those still waiting: an owned one not
+    // applied, a ghost's whose row has not arrived.
+    std::size_t left = acts_.size();
+    for (;;) {
+      // taint_[v] == pass_: v has an earlier activation not done in this pass.
+      if (++pass_ == 0) {  // wrapped: clear the stamps
+        std::fill(taint_.begin(), taint_.end(), 0u);
+        pass_ = 1;
+      }
+      bool tainted = false;
+      std::size_t kept = 0, owned_left = 0;
+      for (std::size_t t = 0; t < left; ++t) {
+        prefetch(t, left);
+        const Act a = acts_[t];
+        const LocalId v = a.node;
+        if (v >= n_owned) {  // a ghost's activation: done once its owner's row of version >= k arrived
+          if (version_[v] < a.k) {
+            taint_[v] = pass_;
+            tainted = true;
+            acts_[kept++] = a;
+          }
+          continue;
+        }
+        bool ready = !tainted || taint_[v] != pass_;
+        for (auto e = off[v]; e < off[v + 1] && ready && tainted; ++e) ready = taint_[adj[e]] != pass_;
+        if (ready) {
+          activate(v);
+          if (v >= n_interior) {
+            version_[v] = a.k;
+            delta_.mark(v);
+          }
+        } else {
+          taint_[v] = pass_;
+          tainted = true;
+          acts_[kept++] = a;
+          ++owned_left;
+        }
+      }
+      left = kept;
+      if (delta_.done()) break;
+      // Clock 1: this rank has done all its activations.
+      delta_.exchange(x_.data(), version_.data(), owned_left == 0 ? 1 : 0);
+    }
+    // Left: at most ghosts' activations whose rows came in the last exchange.
+    for (std::size_t t = 0; t < left; ++t)
+      if (acts_[t].node < n_owned || version_[acts_[t].node] < acts_[t].k)
+        throw Error("async: the replay stopped before the end of its activations");
+    k_ = round_end;
     diff_norms(prob_, x_.data(), prev_.data(), &diff_sq_, &x_sq_);
   }
 
@@ -141,6 +251,13 @@ class Async final : public Algorithm {
     r.node_rows("x", x_.data(), prob_.dim());
     prob_.graph().halo().exchange(x_.data(), prob_.dim());
   }
+  std::int64_t bytes_sent() const override { return delta_.bytes_sent(); }
+  std::int64_t memory_bytes() const override {
+    return static_cast<std::int64_t>((x_.capacity() + prev_.capacity()) * sizeof(double) +
+                                     g2l_.capacity() * sizeof(LocalId) + version_.capacity() * sizeof(std::int64_t) +
+                                     taint_.capacity() * sizeof(std::uint32_t) + acts_.capacity() * sizeof(Act)) +
+           delta_.memory_bytes();
+  }
 
  private:
   GlobalId activation(std::int64_t k) const {
@@ -148,9 +265,42 @@ class Async final : public Algorithm {
     auto i = static_cast<GlobalId>(uniform01(seed_, RngStream::kAsyncClock, static_cast<std::uint64_t>(k)) * n);
     return std::min<GlobalId>(i, prob_.num_sensors() - 1);
   }
-  LocalId local_of(GlobalId g) const {
-    auto it = std::lower_bound(lookup_.begin(), lookup_.end(), std::make_pair(g, LocalId(-1)));
-    return (it != lookup_.end() && it->first == g) ? it->second : -1;
+  // The rows a later activation reads, fetched ahead (activations jump at
+  // random over the graph) in three stages: the offsets 3 * kAhead entries
+  // ahead, the neighbour lists and ranges 2 * kAhead ahead, the neighbours'
+  // rows kAhead ahead.
+  static constexpr std::size_t kAhead = 12;
+  void prefetch(std::size_t t, std::size_t m) const {
+    const auto& g = prob_.graph();
+    const LocalId n_owned = g.num_owned();
+    if (t + 3 * kAhead < m) {
+      const LocalId v = acts_[t + 3 * kAhead].node;
+      if (v < n_owned) {
+        __builtin_prefetch(&g.offsets()[v]);
+        __builtin_prefetch(&prob_.anchor_offsets()[v]);
+      }
+    }
+    if (t + 2 * kAhead < m) {
+      const LocalId v = acts_[t + 2 * kAhead].node;
+      if (v < n_owned) {
+        const auto e = g.offsets()[v];
+        const auto w = g.edge_width();
+        __builtin_prefetch(&g.adjacency()[e]);
+        __builtin_prefetch(&g.adjacency()[e] + 15);
+        __builtin_prefetch(&g.edge_values()[e * w]);
+        __builtin_prefetch(&g.edge_values()[e * w] + 8);
+        __builtin_prefetch(&g.edge_values()[e * w] + 15);
+      }
+    }
+    if (t + kAhead < m) {
+      const LocalId v = acts_[t + kAhead].node;
+      if (v < n_owned) {
+        const int p = prob_.dim();
+        for (auto e = g.offsets()[v]; e < g.offsets()[v + 1]; ++e)
+          __builtin_prefetch(&x_[std::size_t(g.adjacency()[e]) * p]);
+        __builtin_prefetch(&x_[std::size_t(v) * p]);
+      }
+    }
   }
 
   // L_i = delta_i + |A_i|; weighted: sum_j w_ij + sum_k w_ik (Huber keeps it).
@@ -170,7 +320,9 @@ class Async final : public Algorithm {
     double g[3], v[3];
     if (!exact_) {
       // eq. (20): one gradient step with the global L (>= delta_i + |A_i|).
-      local_cost_grad(prob_, x_.data(), i, xi, g);
+      if (!prob_.model().active() && p == 2) l2_grad<2>(prob_, x_.data(), i, xi, g);
+      else if (!prob_.model().active() && p == 3) l2_grad<3>(prob_, x_.data(), i, xi, g);
+      else local_cost_grad(prob_, x_.data(), i, xi, g);
       for (int k = 0; k < p; ++k) xi[k] -= g[k] / L_;
       return;
     }
@@ -205,10 +357,18 @@ class Async final : public Algorithm {
   bool exact_;
   std::uint64_t seed_;
   double L_;
+  struct Act {
+    std::int64_t k;  // position in the activation sequence
+    LocalId node;    // local id (owned or ghost)
+  };
   std::vector<double> x_, prev_;
-  std::vector<std::pair<GlobalId, LocalId>> lookup_;
-  std::vector<std::int64_t> stamp_;
-  std::int64_t k_ = 0, window_ = 64;
+  std::vector<LocalId> g2l_;          // [n] global id -> local id, -1 if not local
+  std::vector<std::int64_t> version_; // [local] position of the row's last activation applied (boundary and ghost rows)
+  std::vector<std::uint32_t> taint_;  // [local] == pass_: an earlier activation not done in this pass
+  std::uint32_t pass_ = 0;
+  std::vector<Act> acts_;             // this iteration's activations of local nodes (then those left)
+  DeltaHalo delta_;
+  std::int64_t k_ = 0;
   double diff_sq_ = 0, x_sq_ = 0;
 };
 

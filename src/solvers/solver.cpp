@@ -236,6 +236,7 @@ class Solver::Run {
   double t0_;
   HaloPlan& halo_;
   std::int64_t instrumentation_bytes_ = 0;  // halo bytes of metrics, not of the methods
+  std::int64_t method_bytes_ = 0;           // the methods' own messages (Algorithm::bytes_sent)
   Summary sum_;
   std::vector<AlgorithmId> phases_;
   std::vector<double> xs_;  // scratch for metrics: a local array whose ghost rows they exchange
@@ -693,6 +694,7 @@ bool Solver::Run::stop(Phase& ph, TerminationType t, std::string msg) {
 void Solver::Run::end_phase(Phase& ph) {
   iter_time_ += ph.time;
   stop_time_ += ph.stop_time;
+  method_bytes_ += ph.alg->bytes_sent();
   record_time_ += ph.record_time;
   double g = 0;
   MPI_Allreduce(&ph.time, &g, 1, MPI_DOUBLE, MPI_MAX, comm_);
@@ -733,7 +735,7 @@ Summary Solver::Run::finish(std::vector<double>* x_out) {
   instrumentation_bytes_ += halo_.bytes_sent() - b0;
   sum_.messages_per_sensor = messages_;
   sum_.reals_per_sensor = reals_;
-  long long mine = halo_.bytes_sent() - instrumentation_bytes_, all = 0;
+  long long mine = halo_.bytes_sent() - instrumentation_bytes_ + method_bytes_, all = 0;
   MPI_Allreduce(&mine, &all, 1, MPI_LONG_LONG, MPI_SUM, comm_);
   sum_.mpi_bytes = all;
   sum_.wall_seconds = MPI_Wtime() - t0_;

@@ -47,6 +47,15 @@ class HaloPlan {
 
   int num_neighbors() const { return static_cast<int>(neighbors_.size()); }
   const std::vector<int>& neighbor_ranks() const { return neighbors_; }
+  /// The plan's communicator (not owned by the plan).
+  MPI_Comm comm() const { return comm_; }
+  LocalId num_owned() const { return n_owned_; }
+  /// The owned local ids sent to neighbor_ranks()[r], in the receiver's ghost order.
+  const LocalId* send_ids(int r) const { return send_ids_.data() + send_begin_[r]; }
+  LocalId send_count(int r) const { return static_cast<LocalId>(send_begin_[r + 1] - send_begin_[r]); }
+  /// Ghost slots [num_owned() + recv_offset(r), + recv_count(r)) come from neighbor_ranks()[r].
+  LocalId recv_offset(int r) const { return recv_offset_[r]; }
+  LocalId recv_count(int r) const { return recv_count_[r]; }
   /// Number of owned nodes sent to some rank, with multiplicity.
   std::int64_t send_volume() const { return send_total_; }
   std::int64_t recv_volume() const { return recv_total_; }

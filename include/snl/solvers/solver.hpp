@@ -212,6 +212,9 @@ class Algorithm {
   virtual double lipschitz() const { return std::numeric_limits<double>::quiet_NaN(); }
   /// Bytes of this rank's state arrays (capacities), for the memory report.
   virtual std::int64_t memory_bytes() const { return 0; }
+  /// Bytes this rank sent in the method's own messages, beside the graph's halo
+  /// plan (async's sparse exchanges); counted in Summary::mpi_bytes.
+  virtual std::int64_t bytes_sent() const { return 0; }
   /// Bytes this rank must move to or from memory in one iteration: every
   /// array streamed once, gathered neighbour rows once (the model of
   /// docs/performance.md, for the bandwidth bound); NaN if not modelled.
