@@ -371,8 +371,8 @@ TEST(ConsensusNewton, DefaultsConvergeInAHandfulOfIterations) {
   EXPECT_FALSE(b.s.converged);
   EXPECT_GT(b.s.max_abs_error, 1e-3);
   EXPECT_EQ(b.s.line_search_trials, 0);
-  for (const ProblemData& f : {make_problem(200, 16, Family::kExp, 1), make_problem(200, 17, Family::kQuadratic, 2),
-                               logistic(200, 3, 30, 18), make_problem(200, 19, Family::kLeastSquares, 3)})
+  for (const ProblemData& f : {make_problem(80, 16, Family::kExp, 1), make_problem(80, 17, Family::kQuadratic, 2),
+                               logistic(80, 3, 30, 18), make_problem(80, 19, Family::kLeastSquares, 3)})
     for (const char* dual : {"cg", "exact", "splitting", ""}) {
       SolveOptions m;
       if (*dual)
