@@ -18,6 +18,9 @@ std::string fmt(double v, int prec = 6);
 /// the same snl::Error if that failed.
 void write_text_on_root(const std::string& path, const std::string& text, MPI_Comm comm);
 
+/// The whole of a text file; snl::Error "PATH: cannot open/read (reason)".
+std::string read_text_file(const std::string& path);
+
 /// The root attribute `format` of an HDF5 file, "" when it is no HDF5 file or has none.
 std::string hdf5_format(const std::string& path);
 

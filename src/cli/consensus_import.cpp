@@ -14,6 +14,8 @@
 #include <string_view>
 #include <vector>
 
+#include "cli/cli_util.hpp"
+#include "io/text_table.hpp"
 #include "snl/cli/commands.hpp"
 #include "snl/cli/consensus.hpp"
 #include "snl/core/mpi_util.hpp"
@@ -22,21 +24,13 @@ namespace snl {
 
 namespace {
 
+using detail::read_text_file;
+using text::parse_double;
+using text::parse_int;
+using text::quoted;
+
 constexpr GlobalId kMaxNodes = 2147483647;  // the format's limit (problem_detail.hpp)
 constexpr int kMaxDim = 4096;
-
-std::string read_text_file(const std::string& path) {
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) throw Error(path + ": cannot open (" + std::strerror(errno) + ")");
-  std::string text;
-  char buf[1 << 16];
-  std::size_t k = 0;
-  while ((k = std::fread(buf, 1, sizeof buf, f)) > 0) text.append(buf, k);
-  const int err = std::ferror(f) ? errno : 0;
-  std::fclose(f);
-  if (err != 0) throw Error(path + ": cannot read (" + std::strerror(err) + ")");
-  return text;
-}
 
 bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
 
@@ -79,30 +73,6 @@ std::vector<CsvRow> csv_rows(std::string_view text) {
   throw Error(file + ":" + std::to_string(line) + ": " + what);
 }
 
-std::string quoted(std::string_view f) {
-  constexpr std::size_t kMax = 40;
-  return "'" + std::string(f.substr(0, kMax)) + (f.size() > kMax ? "...'" : "'");
-}
-
-bool parse_int(std::string_view f, std::int64_t& v) {
-  if (!f.empty() && f.front() == '+') f.remove_prefix(1);
-  if (f.empty() || f.front() == '+') return false;
-  const auto r = std::from_chars(f.data(), f.data() + f.size(), v);
-  return r.ec == std::errc() && r.ptr == f.data() + f.size();
-}
-
-bool parse_double(std::string_view f, double& v) {
-  if (!f.empty() && f.front() == '+') f.remove_prefix(1);
-  if (f.empty() || f.front() == '+') return false;
-  const char* end = f.data() + f.size();
-  const auto r = std::from_chars(f.data(), end, v);
-  if (r.ptr != end) return false;
-  if (r.ec == std::errc::result_out_of_range) {  // under- or overflow: what strtod gives (0 or +-Inf)
-    v = std::strtod(std::string(f).c_str(), nullptr);
-    return true;
-  }
-  return r.ec == std::errc();
-}
 
 /// Column `col` of row r as a node id: an integer >= 0 and < nodes (when nodes > 0).
 GlobalId node_id(const std::string& file, const CsvRow& r, std::size_t col, const std::string& what, GlobalId nodes) {

@@ -16,19 +16,8 @@ namespace snl {
 namespace {
 
 using detail::is_root;
+using detail::read_text_file;
 
-std::string read_text_file(const std::string& path) {
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) throw Error(path + ": cannot open (" + std::strerror(errno) + ")");
-  std::string text;
-  char buf[1 << 16];
-  std::size_t k = 0;
-  while ((k = std::fread(buf, 1, sizeof buf, f)) > 0) text.append(buf, k);
-  const int err = std::ferror(f) ? errno : 0;
-  std::fclose(f);
-  if (err != 0) throw Error(path + ": cannot read (" + std::strerror(err) + ")");
-  return text;
-}
 
 // Sensors that appear in no measurement (an id typo inflates n: worth a line).
 GlobalId sensors_without_measurements(const Network& net) {

@@ -29,6 +29,19 @@ std::string dir_of(const std::string& path) {
 
 namespace detail {
 
+std::string read_text_file(const std::string& path) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) throw Error(path + ": cannot open (" + std::strerror(errno) + ")");
+  std::string text;
+  char buf[1 << 16];
+  std::size_t k = 0;
+  while ((k = std::fread(buf, 1, sizeof buf, f)) > 0) text.append(buf, k);
+  const int err = std::ferror(f) ? errno : 0;
+  std::fclose(f);
+  if (err != 0) throw Error(path + ": cannot read (" + std::strerror(err) + ")");
+  return text;
+}
+
 std::string fmt(double v, int prec) {
   char b[64];
   std::snprintf(b, sizeof b, "%.*g", prec, v);

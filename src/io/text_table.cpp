@@ -44,26 +44,6 @@ void split_fields(std::string_view line, std::vector<std::string_view>& out) {
   }
 }
 
-bool parse_double(std::string_view f, double& v) {
-  if (!f.empty() && f.front() == '+') f.remove_prefix(1);
-  if (f.empty() || f.front() == '+') return false;
-  const char* end = f.data() + f.size();
-  const auto r = std::from_chars(f.data(), end, v);
-  if (r.ptr != end) return false;
-  if (r.ec == std::errc::result_out_of_range) {  // under- or overflow: what strtod gives (0 or +-Inf)
-    v = std::strtod(std::string(f).c_str(), nullptr);
-    return true;
-  }
-  return r.ec == std::errc();
-}
-
-bool parse_int(std::string_view f, std::int64_t& v) {
-  if (!f.empty() && f.front() == '+') f.remove_prefix(1);
-  if (f.empty() || f.front() == '+') return false;
-  const auto r = std::from_chars(f.data(), f.data() + f.size(), v);
-  return r.ec == std::errc() && r.ptr == f.data() + f.size();
-}
-
 std::string num(double v) {
   if (std::isnan(v)) return "NaN";
   if (std::isinf(v)) return v > 0 ? "Inf" : "-Inf";
@@ -76,11 +56,6 @@ std::string s(std::int64_t v) { return std::to_string(v); }
 
 [[noreturn]] void fail(const std::string& name, std::int64_t line, const std::string& what) {
   throw Error(name + ":" + s(line) + ": " + what);
-}
-
-std::string quoted(std::string_view f) {
-  constexpr std::size_t kMax = 40;
-  return "'" + std::string(f.substr(0, kMax)) + (f.size() > kMax ? "...'" : "'");
 }
 
 // Every row has as many columns as the first, between lo and hi.
@@ -151,6 +126,31 @@ void for_each_row(std::string_view text, F&& f) {
 }
 
 }  // namespace
+
+bool parse_double(std::string_view f, double& v) {
+  if (!f.empty() && f.front() == '+') f.remove_prefix(1);
+  if (f.empty() || f.front() == '+') return false;
+  const char* end = f.data() + f.size();
+  const auto r = std::from_chars(f.data(), end, v);
+  if (r.ptr != end) return false;
+  if (r.ec == std::errc::result_out_of_range) {  // under- or overflow: what strtod gives (0 or +-Inf)
+    v = std::strtod(std::string(f).c_str(), nullptr);
+    return true;
+  }
+  return r.ec == std::errc();
+}
+
+bool parse_int(std::string_view f, std::int64_t& v) {
+  if (!f.empty() && f.front() == '+') f.remove_prefix(1);
+  if (f.empty() || f.front() == '+') return false;
+  const auto r = std::from_chars(f.data(), f.data() + f.size(), v);
+  return r.ec == std::errc() && r.ptr == f.data() + f.size();
+}
+
+std::string quoted(std::string_view f) {
+  constexpr std::size_t kMax = 40;
+  return "'" + std::string(f.substr(0, kMax)) + (f.size() > kMax ? "...'" : "'");
+}
 
 std::vector<TextRow> split_rows(std::string_view text) {
   std::vector<TextRow> rows;

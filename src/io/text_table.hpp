@@ -19,6 +19,13 @@ struct TextRow {
   std::vector<std::string_view> fields;
 };
 
+/// A whole field as an integer / a number ('+' allowed once; no trailing
+/// text); a double out of range reads as strtod's 0 or +-Inf.
+bool parse_int(std::string_view field, std::int64_t& v);
+bool parse_double(std::string_view field, double& v);
+/// The field in quotes, cut at 40 characters, for messages.
+std::string quoted(std::string_view field);
+
 /// Splits `text` into data rows: '#' starts a comment, blank lines are
 /// skipped, a line with a comma is split at commas (fields trimmed), any
 /// other at runs of blanks. The first data line is a header, and skipped,
