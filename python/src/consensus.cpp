@@ -106,59 +106,36 @@ sc::SolveOptions options_from(const py::dict& kw) {
 struct Interrupted {};
 class Records {
  public:
-  Records(MPI_Comm comm, py::object progress) : comm_(comm), progress_(std::move(progress)) {}
+  Records(MPI_Comm comm, py::object progress) : guard_(comm), progress_(std::move(progress)) {}
   ~Records() {
     py::gil_scoped_acquire gil;
     progress_ = py::object();
   }
   void operator()(const sc::HistoryRecord& r) {
-    int mine = 0;  // 1: KeyboardInterrupt, 2: the callback raised
+    int mine;
     {
       py::gil_scoped_acquire gil;
-      if (PyErr_CheckSignals() != 0) {
-        mine = PyErr_ExceptionMatches(PyExc_KeyboardInterrupt) ? 1 : 2;
-        if (mine == 2) error_ = py::error_already_set(); else PyErr_Clear();
-      } else if (!progress_.is_none() && snl::comm_rank(comm_) == 0) {
-        try {
-          py::dict d;
-          d["iteration"] = r.iteration;
-          d["dual_iterations"] = r.dual_iterations;
-          d["F"] = r.objective;
-          d["max_abs_error"] = r.max_abs_error;
-          d["decrement"] = r.decrement;
-          d["messages_per_node"] = r.messages;
-          d["elapsed"] = r.elapsed;
-          progress_(d);
-        } catch (py::error_already_set& e) {
-          mine = e.matches(PyExc_KeyboardInterrupt) ? 1 : 2;
-          if (mine == 2) error_ = std::move(e);
-        }
-      }
+      mine = guard_.poll([&] {
+        if (progress_.is_none() || snl::comm_rank(guard_.comm()) != 0) return false;
+        py::dict d;
+        d["iteration"] = r.iteration;
+        d["dual_iterations"] = r.dual_iterations;
+        d["F"] = r.objective;
+        d["max_abs_error"] = r.max_abs_error;
+        d["decrement"] = r.decrement;
+        d["messages_per_node"] = r.messages;
+        d["elapsed"] = r.elapsed;
+        progress_(d);
+        return false;
+      });
     }
-    int all = mine;
-    MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MAX, comm_);
-    if (all != 0) {
-      status_ = all;
-      throw Interrupted{};
-    }
+    if (guard_.agree(mine) != PyGuard::kContinue) throw Interrupted{};
   }
-  void raise() {  // GIL held
-    if (status_ == 1) {
-      PyErr_SetNone(PyExc_KeyboardInterrupt);
-      throw py::error_already_set();
-    }
-    if (error_) {
-      error_->restore();
-      throw py::error_already_set();
-    }
-    throw std::runtime_error("a progress callback raised an exception on another rank");
-  }
+  void raise() { guard_.raise_if_needed(); }  // GIL held
 
  private:
-  MPI_Comm comm_;
+  PyGuard guard_;
   py::object progress_;
-  int status_ = 0;
-  std::optional<py::error_already_set> error_;
 };
 
 py::dict solve(const PyProblem* problem, const py::dict& kw, const py::object& comm_handle,

@@ -102,55 +102,27 @@ struct Start {
 // whether any rank's callback asked to stop, raised, or saw Ctrl-C.
 class PyCallbacks : public snl::IterationCallback {
  public:
-  enum Status : int { kContinue = 0, kStop = 1, kError = 2, kInterrupt = 3 };
   PyCallbacks(MPI_Comm comm, py::object progress, py::object callback)
-      : comm_(comm), progress_(std::move(progress)), callback_(std::move(callback)) {}
+      : guard_(comm), progress_(std::move(progress)), callback_(std::move(callback)) {}
   ~PyCallbacks() override {
     py::gil_scoped_acquire gil;
     progress_ = py::object();
     callback_ = py::object();
   }
   snl::CallbackReturn operator()(const snl::IterationSummary& s) override {
-    int mine = kContinue;
+    int mine;
     {
       py::gil_scoped_acquire gil;
-      if (PyErr_CheckSignals() != 0) {
-        mine = PyErr_ExceptionMatches(PyExc_KeyboardInterrupt) ? kInterrupt : kError;
-        if (mine == kError) error_ = py::error_already_set();
-        else PyErr_Clear();
-      } else {
-        try {
-          if (!progress_.is_none() && snl::comm_rank(comm_) == 0) progress_(record(s));
-          if (!callback_.is_none() && py::bool_(callback_(record(s)))) mine = kStop;
-        } catch (py::error_already_set& e) {
-          if (e.matches(PyExc_KeyboardInterrupt)) {
-            mine = kInterrupt;
-          } else {
-            mine = kError;
-            error_ = std::move(e);
-          }
-        }
-      }
+      mine = guard_.poll([&] {
+        if (!progress_.is_none() && snl::comm_rank(guard_.comm()) == 0) progress_(record(s));
+        return !callback_.is_none() && py::bool_(callback_(record(s)));
+      });
     }
-    int all = mine;
-    MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MAX, comm_);
-    if (all != kContinue) status_ = all;
-    return all == kContinue ? snl::CallbackReturn::kContinue : snl::CallbackReturn::kAbort;
+    return guard_.agree(mine) == snl_py::PyGuard::kContinue ? snl::CallbackReturn::kContinue
+                                                             : snl::CallbackReturn::kAbort;
   }
   // After the solve (GIL held): raises what stopped the run, on every rank.
-  void raise_if_needed() {
-    if (status_ == kInterrupt) {
-      PyErr_SetNone(PyExc_KeyboardInterrupt);
-      throw py::error_already_set();
-    }
-    if (status_ == kError) {
-      if (error_) {
-        error_->restore();
-        throw py::error_already_set();
-      }
-      throw std::runtime_error("a callback raised an exception on another rank");
-    }
-  }
+  void raise_if_needed() { guard_.raise_if_needed(); }
   static py::dict record(const snl::IterationSummary& s) {
     py::dict d;
     d["phase"] = s.phase;
@@ -169,10 +141,8 @@ class PyCallbacks : public snl::IterationCallback {
   }
 
  private:
-  MPI_Comm comm_;
+  snl_py::PyGuard guard_;
   py::object progress_, callback_;
-  int status_ = kContinue;
-  std::optional<py::error_already_set> error_;
 };
 
 // SolveCommand's options from keywords; the other keys are refused by name.
