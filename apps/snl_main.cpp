@@ -148,6 +148,19 @@ void add_solve(CLI::App& app, Commands& c) {
                 "iterations per pass over memory (same iterates; tests and records at pass ends; " +
                     honoured_by(&Info::temporal_blocking) + ")")
       ->capture_default_str();
+  s->add_option("--mode", c.solve.solver.mode,
+                "replay|free: replay the sequential activation order bit for bit, or let every rank activate its "
+                "own nodes unsynchronised (not reproducible; docs/async.md; " + honoured_by(&Info::free_mode) + ")")
+      ->capture_default_str();
+  s->add_option("--straggler-delay", c.solve.solver.straggler_delay,
+                "test option: one rank sleeps SECONDS per iteration (--mode free: per n_own activations of its own)")
+      ->capture_default_str();
+  s->add_option("--straggler-rank", c.solve.solver.straggler_rank,
+                "the rank --straggler-delay slows (-1: the last)")
+      ->capture_default_str();
+  s->add_option("--target-cost", c.solve.solver.target_cost,
+                "benchmark option: stop once the phase's cost is at or below this (tested with the stopping rule; 0: off)")
+      ->capture_default_str();
   s->add_option("--weights", c.solve.solver.weights,
                 "file|multiplicative:NF|none: ML weights 1/sigma^2 (auto: file when the network has sigmas; " +
                     honoured_by(&Info::measurement_model) + ")")

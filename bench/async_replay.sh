@@ -10,13 +10,18 @@
 # async is run once per repetition beside the new one) and any rank count.
 # One line per run; the ratio is to the relaxation run just before, in the same
 # repetition. Recorded runs: docs/data/perf/async-replay-*.txt.
+# With FREE=1 (the default) also async --mode free (docs/async.md): each rank
+# activates its own nodes unsynchronised, ITERS times n_own activations per
+# rank (--max-iter, --tol 0), so its time per "iteration" is the slowest
+# rank's per n_own activations; its cost is not reproducible (other bits on
+# every run).
 #
 #   SIZES="100000 1000000" REPS=3 bench/async_replay.sh
 # Environment: SIZES ("100000 1000000"), REPS (3), NP (2), ITERS (20: relaxation
 # and async iterations; 10 from 10^6 sensors), EXACT_ITERS (3; async-exact runs
 # below 10^6 sensors only), WORK (/tmp/snl-async: the networks, made with
 # `snl generate --sensors N` if missing), BIN (build/bin), OLD (another snl
-# binary whose async runs beside, below 10^6 sensors; unset: none). About 2 minutes at 10^5 and 10^6
+# binary whose async runs beside, below 10^6 sensors; unset: none), FREE (1: also async-free). About 2 minutes at 10^5 and 10^6
 # with REPS=3 on a 2-core VM (the 10^6 network takes a minute to generate).
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
@@ -27,6 +32,7 @@ NP=${NP:-2}
 EXACT_ITERS=${EXACT_ITERS:-3}
 WORK=${WORK:-/tmp/snl-async}
 OLD=${OLD:-}
+FREE=${FREE:-1}
 export OMPI_ALLOW_RUN_AS_ROOT=${OMPI_ALLOW_RUN_AS_ROOT:-1} OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=${OMPI_ALLOW_RUN_AS_ROOT_CONFIRM:-1}
 mkdir -p "$WORK"
 tmp=$(mktemp -d)
@@ -36,7 +42,9 @@ trap 'rm -rf "$tmp"' EXIT
 # "seconds_per_iteration mpi_bytes_per_iteration relaxed_cost".
 run() {
   local snl=$1 n=$2 alg=$3 it=$4
-  mpirun -np "$NP" "$snl" solve "$WORK/net_$n.h5" -o "$tmp/out.h5" --algorithm "$alg" --init random \
+  local extra=()
+  [ "$alg" = async-free ] && alg=async extra=(--mode free)
+  mpirun -np "$NP" "$snl" solve "$WORK/net_$n.h5" -o "$tmp/out.h5" --algorithm "$alg" "${extra[@]}" --init random \
     --max-iter "$it" --tol 0 --history-every 1000000 --json "$tmp/s.json" -q >/dev/null
   /usr/bin/python3 - "$tmp/s.json" "$it" <<'EOF'
 import json, sys
@@ -55,6 +63,7 @@ for n in $SIZES; do
   it=${ITERS:-$([ "$n" -ge 1000000 ] && echo 10 || echo 20)}
   for rep in $(seq 1 "$REPS"); do
     methods="relaxation async"
+    [ "$FREE" = 1 ] && methods="$methods async-free"
     [ "$n" -lt 1000000 ] && methods="$methods async-exact"
     [ -n "$OLD" ] && [ "$n" -lt 1000000 ] && methods="$methods old-async"
     base=""

@@ -253,17 +253,19 @@ def solve(net, algorithm=None, init=None, comm=None, progress=None, callback=Non
     return Result(_snl.solve(raw, alg, kind, rows, _comm_handle(comm), progress, callback, options))
 
 
-def track(frames, algorithm=None, init=None, comm=None, warm_algorithm=None, **options):
+def track(frames, algorithm=None, init=None, comm=None, warm_algorithm=None, warm_tol=None, **options):
     """Solves a sequence of networks (same sensors, moving), each frame
     warm-started from the last frame's positions; the first frame from `init`
     with `algorithm`, the others with `warm_algorithm` (None: `algorithm`;
-    "ml-agd" converges fastest from a nearby start, docs/python.md).
+    "ml-agd" converges fastest from a nearby start) and, if given, `--tol
+    warm_tol` (1e-3 keeps the RMSE and saves most iterations, docs/python.md).
     Returns the list of Results."""
     results = []
     start = init
     for net in frames:
         alg = algorithm if not results or warm_algorithm is None else warm_algorithm
-        r = solve(net, algorithm=alg, init=start, comm=comm, **options)
+        opts = options if not results or warm_tol is None else dict(options, tol=warm_tol)
+        r = solve(net, algorithm=alg, init=start, comm=comm, **opts)
         results.append(r)
         start = r.positions
     return results

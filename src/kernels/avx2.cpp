@@ -87,6 +87,9 @@ SNL_AVX2 void relax_chunks_avx2(const LocalizationProblem& prob, const NodeLanes
                                 std::int64_t c1, const RelaxStep& s) {
   const __m256d one = _mm256_set1_pd(1.0), vL = _mm256_set1_pd(s.L), vb = _mm256_set1_pd(s.beta);
   __m256d DD = load_scalars_0213(s.norms), SS = load_scalars_0213(s.norms + 4), GS = load_scalars_0213(s.norms + 8);
+  const bool rs = s.restart && s.inv_d;
+  __m256d RS = rs ? _mm256_loadu_pd(s.restart) : _mm256_setzero_pd();
+  __m256d RA = rs ? _mm256_loadu_pd(s.restart + 4) : _mm256_setzero_pd();
   const std::int64_t last = nl.groups() - 1;
   for (std::int64_t c = c0; c < c1; ++c) {
     const LocalId v0 = nl.first[c];
@@ -125,11 +128,22 @@ SNL_AVX2 void relax_chunks_avx2(const LocalizationProblem& prob, const NodeLanes
     for (int k = 0; k < P; ++k) DD = _mm256_add_pd(DD, _mm256_mul_pd(D[k], D[k]));
     for (int k = 0; k < P; ++k) SS = _mm256_add_pd(SS, _mm256_mul_pd(N[k], N[k]));
     for (int k = 0; k < P; ++k) GS = _mm256_add_pd(GS, _mm256_mul_pd(A[k], A[k]));
+    if (rs) {  // the scalar twin's q_v per lane: sum over c from +0.0, then / inv_d (0 where inv_d <= 0)
+      __m256d T = _mm256_setzero_pd();
+      for (int k = 0; k < P; ++k) T = _mm256_add_pd(T, _mm256_mul_pd(_mm256_sub_pd(W[k], N[k]), D[k]));
+      const __m256d Q = _mm256_and_pd(_mm256_div_pd(T, Dinv), _mm256_cmp_pd(Dinv, _mm256_setzero_pd(), _CMP_GT_OQ));
+      RS = _mm256_add_pd(RS, Q);
+      RA = _mm256_add_pd(RA, _mm256_andnot_pd(_mm256_set1_pd(-0.0), Q));
+    }
   }
   // (0, 2, 1, 3) is its own inverse.
   _mm256_storeu_pd(s.norms, _mm256_permute4x64_pd(DD, _MM_SHUFFLE(3, 1, 2, 0)));
   _mm256_storeu_pd(s.norms + 4, _mm256_permute4x64_pd(SS, _MM_SHUFFLE(3, 1, 2, 0)));
   _mm256_storeu_pd(s.norms + 8, _mm256_permute4x64_pd(GS, _MM_SHUFFLE(3, 1, 2, 0)));
+  if (rs) {
+    _mm256_storeu_pd(s.restart, RS);
+    _mm256_storeu_pd(s.restart + 4, RA);
+  }
   _mm_sfence();  // order the non-temporal stores before what follows
 }
 
@@ -186,8 +200,15 @@ SNL_AVX2 void mm_chunks_avx2(const LocalizationProblem& prob, const NodeLanes& n
       const __m256d nv = _mm256_sqrt_pd(square_sum(yn, P));
       const __m256d pos = _mm256_cmp_pd(nv, zero, _CMP_GT_OQ);
       const __m256d f = _mm256_div_pd(r, nv);
-      for (int k = 0; k < P; ++k)  // P_sphere(0) = rho e_1
-        _mm256_storeu_pd(yg + 4 * k, _mm256_blendv_pd(k == 0 ? r : zero, _mm256_mul_pd(yn[k], f), pos));
+      for (int k = 0; k < P; ++k) {  // P_sphere(0) = rho e_1
+        const __m256d Yn = _mm256_blendv_pd(k == 0 ? r : zero, _mm256_mul_pd(yn[k], f), pos);
+        if (Extrap && s.stream_y) {  // non-temporal, 16 bytes at a time (16-byte aligned storage)
+          _mm_stream_pd(yg + 4 * k, _mm256_castpd256_pd128(Yn));
+          _mm_stream_pd(yg + 4 * k + 2, _mm256_extractf128_pd(Yn, 1));
+        } else {
+          _mm256_storeu_pd(yg + 4 * k, Yn);
+        }
+      }
     }
     if (nl.has_anchor[c]) {
       alignas(32) double tmp[4 * P];

@@ -56,6 +56,15 @@ SNL_AVX512 inline void load_own8(const double* r, __m512d* U) {
   }
 }
 
+// Eight doubles with non-temporal stores, 16 bytes at a time (std::vector
+// storage is 16-byte aligned, as _mm_stream_pd needs).
+SNL_AVX512 inline void stream8(double* t, __m512d v) {
+  _mm_stream_pd(t, _mm512_castpd512_pd128(v));
+  _mm_stream_pd(t + 2, _mm512_extractf64x2_pd(v, 1));
+  _mm_stream_pd(t + 4, _mm512_extractf64x2_pd(v, 2));
+  _mm_stream_pd(t + 6, _mm512_extractf64x2_pd(v, 3));
+}
+
 // The inverse of load_own8; non-temporal stores for p = 2 only (see store_own).
 template <int P>
 SNL_AVX512 inline void store_own8(double* t, const __m512d* U, bool stream) {
@@ -101,6 +110,9 @@ SNL_AVX512 void relax_chunks_avx512(const LocalizationProblem& prob, const NodeL
                                     std::int64_t c1, const RelaxStep& s) {
   const __m512d one = _mm512_set1_pd(1.0), vL = _mm512_set1_pd(s.L), vb = _mm512_set1_pd(s.beta);
   __m512d DD = load_lanes8(s.norms), SS = load_lanes8(s.norms + 8), GS = load_lanes8(s.norms + 16);
+  const bool rs = s.restart && s.inv_d;
+  __m512d RS = rs ? _mm512_loadu_pd(s.restart) : _mm512_setzero_pd();
+  __m512d RA = rs ? _mm512_loadu_pd(s.restart + 8) : _mm512_setzero_pd();
   const std::int64_t last = nl.groups() - 1;
   for (std::int64_t c = c0; c < c1; ++c) {
     const LocalId v0 = nl.first[c];
@@ -139,10 +151,21 @@ SNL_AVX512 void relax_chunks_avx512(const LocalizationProblem& prob, const NodeL
     for (int k = 0; k < P; ++k) DD = _mm512_add_pd(DD, _mm512_mul_pd(D[k], D[k]));
     for (int k = 0; k < P; ++k) SS = _mm512_add_pd(SS, _mm512_mul_pd(N[k], N[k]));
     for (int k = 0; k < P; ++k) GS = _mm512_add_pd(GS, _mm512_mul_pd(A[k], A[k]));
+    if (rs) {  // the scalar twin's q_v per lane: sum over c from +0.0, then / inv_d
+      __m512d T = _mm512_setzero_pd();
+      for (int k = 0; k < P; ++k) T = _mm512_add_pd(T, _mm512_mul_pd(_mm512_sub_pd(W[k], N[k]), D[k]));
+      const __m512d Q = _mm512_maskz_div_pd(_mm512_cmp_pd_mask(Dinv, _mm512_setzero_pd(), _CMP_GT_OQ), T, Dinv);
+      RS = _mm512_add_pd(RS, Q);
+      RA = _mm512_add_pd(RA, _mm512_abs_pd(Q));
+    }
   }
   store_lanes8(s.norms, DD);
   store_lanes8(s.norms + 8, SS);
   store_lanes8(s.norms + 16, GS);
+  if (rs) {
+    _mm512_storeu_pd(s.restart, RS);
+    _mm512_storeu_pd(s.restart + 8, RA);
+  }
   _mm_sfence();  // order the non-temporal stores before what follows
 }
 
@@ -191,8 +214,13 @@ SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& prob, const NodeLane
       const __m512d nv = _mm512_sqrt_pd(square_sum8(yn, P));
       const __mmask8 pos = _mm512_cmp_pd_mask(nv, zero, _CMP_GT_OQ);
       const __m512d f = _mm512_div_pd(r, nv);
-      for (int k = 0; k < P; ++k)  // P_sphere(0) = rho e_1
-        _mm512_storeu_pd(yg + 8 * k, _mm512_mask_mul_pd(k == 0 ? r : zero, pos, yn[k], f));
+      for (int k = 0; k < P; ++k) {  // P_sphere(0) = rho e_1
+        const __m512d Yn = _mm512_mask_mul_pd(k == 0 ? r : zero, pos, yn[k], f);
+        if (Extrap && s.stream_y)
+          stream8(yg + 8 * k, Yn);
+        else
+          _mm512_storeu_pd(yg + 8 * k, Yn);
+      }
     }
     if (nl.has_anchor[c]) {
       alignas(64) double tmp[8 * P];

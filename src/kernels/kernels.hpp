@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "snl/graph/halo.hpp"
@@ -165,6 +166,11 @@ void run_levels(const LevelPlan& lp, const NodeLanes& nl, int n, HaloPlan& halo,
   }
 }
 
+/// The problem's lane layout, built once and shared by every phase of a solve
+/// (LocalizationProblem::derived_cache): the phases' kernels read the same
+/// layout, which at 10^7 sensors is a gigabyte per rank to build and fault in.
+std::shared_ptr<const NodeLanes> shared_lanes(const LocalizationProblem& prob);
+
 /// Whether the steps should write their node rows with non-temporal stores:
 /// when `bytes` (the iterate arrays one step streams) exceed what a cache
 /// keeps from one iteration to the next (16 MiB): below that the rows stay in
@@ -199,6 +205,11 @@ struct RelaxStep {
   /// Per owned node 1/D_v: x(k) = w - g * inv_d[v] instead of w - g/L
   /// (ml-agd's diagonal majorizer).
   const double* inv_d = nullptr;
+  /// With inv_d: ml-agd's restart terms q_v = sum_c (w - x(k))_c (x(k) -
+  /// x(k-1))_c / inv_d[v] (nodes with inv_d[v] > 0), added per lane into
+  /// restart[0 .. C) and their absolute values into restart[C .. 2C), in no
+  /// fixed order (relaxation.cpp bounds the rounding).
+  double* restart = nullptr;
 };
 void relax_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
                   const RelaxStep& s);
@@ -224,6 +235,10 @@ struct MMStep {
   const double* ya = nullptr;
   const double* yb = nullptr;
   double beta = 0;
+  /// Non-temporal stores of y where ya is set (the step writes a buffer it
+  /// does not read: without them every line of y is read for ownership
+  /// first, a third more traffic on y; stream_rows of y's bytes).
+  bool stream_y = false;
 };
 void mm_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
                const MMStep& s);

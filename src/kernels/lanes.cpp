@@ -71,4 +71,14 @@ void NodeLanes::build(const LocalizationProblem& prob) {
   });
 }
 
+std::shared_ptr<const NodeLanes> shared_lanes(const LocalizationProblem& prob) {
+  std::shared_ptr<void>& slot = prob.derived_cache();
+  if (!slot) {
+    auto lanes = std::make_shared<NodeLanes>();
+    lanes->build(prob);
+    slot = lanes;
+  }
+  return std::static_pointer_cast<const NodeLanes>(slot);
+}
+
 }  // namespace snl::detail

@@ -1,6 +1,8 @@
 // The scalar twins of the node-lane steps, one node at a time: the portable
 // path (no AVX2, SNL_SIMD=0), the path for partial chunks, and the reference
 // the SIMD kernels are tested against bit for bit.
+#include <cmath>
+
 #include "kernels/simd_common.hpp"
 #include "kernels/terms.hpp"
 
@@ -28,13 +30,20 @@ void relax_chunk_scalar(const LocalizationProblem& prob, const NodeLanes& nl, st
       for (int k = 0; k < P; ++k) acc[k] += t[k];
     }
     if (aoff[v] != aoff[v + 1]) add_anchor_disk_terms(prob, v, s.w + i0, acc, s.ml);
+    double rt = 0;  // ml-agd's restart term (RelaxStep::restart)
     for (int k = 0; k < P; ++k) {
       const double now = s.w[i0 + k] - (s.inv_d ? acc[k] * s.inv_d[v] : acc[k] / s.L), d = now - s.x[i0 + k];
+      rt += (s.w[i0 + k] - now) * d;
       s.xn[i0 + k] = now;
       s.wn[i0 + k] = now + s.beta * d;
       s.norms[q] += d * d;
       s.norms[C + q] += now * now;
       s.norms[2 * C + q] += acc[k] * acc[k];
+    }
+    if (s.restart && s.inv_d && s.inv_d[v] > 0) {
+      const double r = rt / s.inv_d[v];
+      s.restart[L] += r;
+      s.restart[C + L] += std::fabs(r);
     }
   }
 }

@@ -556,6 +556,7 @@ void LocalizationProblem::resample_ranges(double sigma, std::uint64_t seed) {
     for (int c = 0; c < p; ++c) s += (a[c] - b[c]) * (a[c] - b[c]);
     return std::sqrt(s);
   };
+  derived_cache_.reset();  // built from the ranges
   auto& ev = graph_.mutable_edge_values();
   const auto& off = graph_.offsets();
   const auto& adj = graph_.adjacency();

@@ -331,6 +331,8 @@ std::string checkpoint_options(const SolverOptions& opt) {
   if (opt.temporal_block != 1) os << "|temporal_block=" << opt.temporal_block;
   if (opt.test_every != 0) os << "|test_every=" << opt.test_every;
   if (seed_drives_iterates(opt.algorithm)) os << "|seed=" << opt.seed;
+  if (opt.mode != "replay") os << "|mode=" << opt.mode;
+  if (opt.target_cost > 0) os << "|target_cost=" << opt.target_cost;
   if (opt.weights != "auto") os << "|weights=" << opt.weights;
   if (opt.loss != "l2") os << "|loss=" << opt.loss;
   if (opt.esdp_rho != 1.0) os << "|esdp_rho=" << opt.esdp_rho;

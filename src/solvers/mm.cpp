@@ -5,6 +5,7 @@
 // pass over memory (kernels.hpp).
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 #include "core/dim_dispatch.hpp"
 #include "core/exact_sum.hpp"
@@ -37,8 +38,8 @@ class MM final : public Algorithm {
     x_ = with_ghost_rows(prob_, x0);
     xn_ = x_;
     prob_.graph().halo().exchange(x_.data(), prob_.dim());
-    lanes_.build(prob_);
-    plan_.build(prob_, lanes_, levels_);
+    lanes_ = detail::shared_lanes(prob_);
+    plan_.build(prob_, *lanes_, levels_);
     norms_.assign(std::size_t(levels_) * 2 * detail::kMaxLanes, 0.0);
     detail::with_dim(prob_.dim(), [&](auto P) { init<decltype(P)::value>(); });
     stream_ = detail::stream_rows(sizeof(double) * (2 * x_.size() + y_.size()));
@@ -56,15 +57,15 @@ class MM final : public Algorithm {
   void iterate_levels(int n) override {
     std::fill(norms_.begin(), norms_.end(), 0.0);
     double* const buf[2] = {x_.data(), xn_.data()};
-    detail::run_levels(plan_, lanes_, n, prob_.graph().halo(), buf, prob_.dim(),
+    detail::run_levels(plan_, *lanes_, n, prob_.graph().halo(), buf, prob_.dim(),
                        [&](int j, std::int64_t c0, std::int64_t c1) {
                          const detail::MMStep st{buf[j & 1], buf[(j + 1) & 1], y_.data(), aw_.data(),
                                                  (L_ - 1.0) / L_, 1.0 / L_, &norms_[std::size_t(j) * 2 * detail::kMaxLanes],
                                                  stream_ && j == n - 1};
-                         detail::mm_chunks(prob_, lanes_, c0, c1, st);
+                         detail::mm_chunks(prob_, *lanes_, c0, c1, st);
                        });
     double sums[2];
-    detail::sum_lanes(&norms_[std::size_t(n - 1) * 2 * detail::kMaxLanes], lanes_.lanes, 2, sums);
+    detail::sum_lanes(&norms_[std::size_t(n - 1) * 2 * detail::kMaxLanes], lanes_->lanes, 2, sums);
     diff_sq_ = sums[0];
     x_sq_ = sums[1];
     if (n % 2 == 1) std::swap(x_, xn_);
@@ -74,7 +75,7 @@ class MM final : public Algorithm {
   std::int64_t memory_bytes() const override {
     return static_cast<std::int64_t>(sizeof(double) * (x_.capacity() + xn_.capacity() + y_.capacity() +
                                                        aw_.capacity() + norms_.capacity())) +
-           lanes_.bytes() + plan_.bytes();
+           (lanes_ ? lanes_->bytes() : 0) + plan_.bytes();
   }
   // Per owned node: offsets and anchor offsets 16, x rows 8p (ghosts
   // included), x(t+1) written 8p; per slot: adjacency 4, range 8, orientation
@@ -112,12 +113,12 @@ class MM final : public Algorithm {
  private:
   // Index in y_ (lane layout) of coordinate c of CSR slot e of owned node v.
   std::size_t y_index(LocalId v, std::int64_t e, int c) const {
-    return lanes_.at(v, e - prob_.graph().offsets()[v], prob_.dim(), c);
+    return lanes_->at(v, e - prob_.graph().offsets()[v], prob_.dim(), c);
   }
 
   template <int P>
   void init() {
-    y_.assign(std::size_t(lanes_.groups()) * lanes_.lanes * P, 0.0);
+    y_.assign(std::size_t(lanes_->groups()) * lanes_->lanes * P, 0.0);
     aw_.assign(prob_.anchor_ranges().size() * P, 0.0);
     detail::best_edge_variables<P>(prob_, x_.data(),
                                    [&](LocalId v, std::int64_t e, int c) { return &y_[y_index(v, e, c)]; }, aw_.data());
@@ -160,7 +161,7 @@ class MM final : public Algorithm {
   LocalizationProblem& prob_;
   double L_;
   std::vector<double> x_, xn_, y_, aw_;  // y_: edge variables in the lane layout (NodeLanes::at)
-  detail::NodeLanes lanes_;
+  std::shared_ptr<const detail::NodeLanes> lanes_;  // the phases share one (detail::shared_lanes)
   int levels_;              // iterations per pass at most (SolverOptions::temporal_block)
   detail::LevelPlan plan_;
   std::vector<double> norms_;  // per level and lane: ||x(t+1) - x(t)||^2, ||x(t+1)||^2

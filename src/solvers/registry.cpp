@@ -41,10 +41,11 @@ const std::vector<AlgorithmInfo> kRegistry = {
      true, false, true, true, false, false, true},
     {A::kPM, "pm", 3, detail::make_pm, {A::kPM},
      false, false, false, false, false, false, true},
+    // --mode replay (the default): the sequential order, bit for bit; --mode free: unsynchronised.
     {A::kAsync, "async", 4, detail::make_async, {A::kAsync},
-     false, false, false, false, false, false, true},
+     false, false, false, false, false, false, true, false, false, true},
     {A::kAsyncExact, "async-exact", 5, detail::make_async_exact, {A::kAsyncExact},
-     false, false, false, false, false, false, true},
+     false, false, false, false, false, false, true, false, false, true},
     {A::kBBCalafiore, "bb-calafiore", 10, detail::make_bb_calafiore, {A::kBBCalafiore},
      true, false, true, true, false, false, false, false},
     // The centralized SDP relaxations (solvers/centralized/), solved once by DSDP on rank 0.

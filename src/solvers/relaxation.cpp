@@ -15,7 +15,10 @@
 // and one halo exchange per iteration, with no edge variables: a fifth of
 // mm-accel's memory traffic.
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <memory>
+#include <cstdlib>
 
 #include "core/exact_sum.hpp"
 #include "kernels/kernels.hpp"
@@ -47,11 +50,12 @@ class Relaxation final : public Algorithm {
     w_.assign(x_.size(), 0.0);
     w_next_.assign(x_.size(), 0.0);
     w_ready_ = false;
-    lanes_.build(prob_);
-    plan_.build(prob_, lanes_, levels_);
+    lanes_ = detail::shared_lanes(prob_);
+    plan_.build(prob_, *lanes_, levels_);
     norms_.assign(std::size_t(levels_) * 3 * detail::kMaxLanes, 0.0);
     stream_ = detail::stream_rows(4 * sizeof(double) * x_.size());
     k_ = 0;
+    exact_restart_tests_ = std::getenv("SNL_TEST_EXACT_RESTART") != nullptr;  // tests: the exact path always
     if (ml_) {  // 1 / (2 delta_v + |A_v|); 0 for a node with no terms (its gradient is 0)
       inv_d_.assign(prob_.num_owned(), 0.0);
       const auto& aoff = prob_.anchor_offsets();
@@ -81,22 +85,23 @@ class Relaxation final : public Algorithm {
       for (std::size_t t = 0; t < m; ++t) w_[t] = x_[t] + beta * (x_[t] - prev_[t]);
     }
     std::fill(norms_.begin(), norms_.end(), 0.0);
+    restart_sums_.fill(0.0);
     double* const w[2] = {w_.data(), w_next_.data()};
     double* const x[2] = {x_.data(), prev_.data()};
     const std::int64_t k0 = k_;
-    detail::run_levels(plan_, lanes_, n, prob_.graph().halo(), w, p, [&](int j, std::int64_t c0, std::int64_t c1) {
+    detail::run_levels(plan_, *lanes_, n, prob_.graph().halo(), w, p, [&](int j, std::int64_t c0, std::int64_t c1) {
       const std::int64_t k = k0 + j + 1;  // the iteration this level computes
       const double beta_next = static_cast<double>(k - 1) / static_cast<double>(k + 2);
       // g = grad f_hat(w) (003, Alg. 1 steps 7-8); x(k) = w - g/L goes over
       // x(k-2), which is no longer needed; w(k+1) = x(k) + beta_next (x(k) - x(k-1)).
-      detail::relax_chunks(prob_, lanes_, c0, c1,
+      detail::relax_chunks(prob_, *lanes_, c0, c1,
                            {w[j & 1], x[j & 1], x[(j + 1) & 1], w[(j + 1) & 1], L_, beta_next,
                             &norms_[std::size_t(j) * 3 * detail::kMaxLanes], stream_ && j == n - 1, ml_,
-                            ml_ ? inv_d_.data() : nullptr});
+                            ml_ ? inv_d_.data() : nullptr, ml_ && j == n - 1 ? restart_sums_.data() : nullptr});
     });
     k_ += n;
     double sums[3];
-    detail::sum_lanes(&norms_[std::size_t(n - 1) * 3 * detail::kMaxLanes], lanes_.lanes, 3, sums);
+    detail::sum_lanes(&norms_[std::size_t(n - 1) * 3 * detail::kMaxLanes], lanes_->lanes, 3, sums);
     diff_sq_ = sums[0];
     x_sq_ = sums[1];
     gsq_ = sums[2];
@@ -116,7 +121,7 @@ class Relaxation final : public Algorithm {
   std::int64_t memory_bytes() const override {
     return static_cast<std::int64_t>(sizeof(double) * (x_.capacity() + prev_.capacity() + w_.capacity() +
                                                        w_next_.capacity() + norms_.capacity())) +
-           lanes_.bytes() + plan_.bytes();
+           (lanes_ ? lanes_->bytes() : 0) + plan_.bytes();
   }
   // Per owned node: offsets and anchor offsets 16, w rows 8p (own and
   // neighbours' once, ghosts included), x(k-1) read, x(k) and w(k+1) written
@@ -171,36 +176,62 @@ class Relaxation final : public Algorithm {
 
  private:
   // ml-agd's restart test: grad f(w(k)) . (x(k) - x(k-1)) > 0, where
-  // grad f(w(k))_v = D_v (w(k) - x(k))_v (w(k) is in w_next_ after the swap),
-  // summed exactly per node (one collective).
-  bool restart_due() const {
+  // grad f(w(k))_v = D_v (w(k) - x(k))_v (w(k) is in w_next_ after the swap):
+  // the sign of the exact sum of the per-node terms q_v (restart_term), the
+  // same decision for any partition. The kernel adds the q_v in plain doubles
+  // as it writes x(k) (RelaxStep::restart, the same bits per term); those sums
+  // (one collective) settle the sign unless it is within their rounding
+  // bound of zero, and then the exact sum decides (a pass over the rows).
+  // Bound: a sum of n_r terms in any order is within gamma_{n_r-1} sum |q| of
+  // the exact one (Higham, Accuracy and Stability of Numerical Algorithms,
+  // 2002, sec. 4.2), below n u sum |q| with n the sensors and u = 2^-53; the
+  // ranks' sums are added exactly; 2 n u A leaves a factor two for the
+  // rounding of A and of the total, and n 2^-1074 covers subnormal terms.
+  double restart_term(LocalId v) const {
     const int p = prob_.dim();
-    detail::ExactSum s;
-    for (LocalId v = 0; v < prob_.num_owned(); ++v) {
-      double t = 0;
-      for (int c = 0; c < p; ++c) {
-        const std::size_t i = std::size_t(v) * p + c;
-        t += (w_next_[i] - x_[i]) * (x_[i] - prev_[i]);
-      }
-      if (inv_d_[v] > 0) s.add(t / inv_d_[v]);
+    double t = 0;
+    for (int c = 0; c < p; ++c) {
+      const std::size_t i = std::size_t(v) * p + c;
+      t += (w_next_[i] - x_[i]) * (x_[i] - prev_[i]);
     }
-    detail::allreduce_exact(&s, 1, prob_.comm());
-    return s.value() > 0;
+    return t / inv_d_[v];
+  }
+  bool restart_due() const {
+    double s = 0, a = 0;  // the kernel's lane sums (RelaxStep::restart), in any order: the bound holds
+    for (int L = 0; L < lanes_->lanes; ++L) {
+      s += restart_sums_[std::size_t(L)];
+      a += restart_sums_[std::size_t(lanes_->lanes + L)];
+    }
+    detail::ExactSum sums[2];
+    sums[0].add(s);
+    sums[1].add(a);
+    detail::allreduce_exact(sums, 2, prob_.comm());
+    const double S = sums[0].value(), A = sums[1].value();
+    const double n = static_cast<double>(prob_.num_sensors()) + 2.0;
+    if (!exact_restart_tests_ && std::fabs(S) > 2.0 * n * 0x1p-53 * A + n * 0x1p-1074)
+      return S > 0;  // NaN or inf: not settled here
+    detail::ExactSum e;
+    for (LocalId v = 0; v < prob_.num_owned(); ++v)
+      if (inv_d_[v] > 0) e.add(restart_term(v));
+    detail::allreduce_exact(&e, 1, prob_.comm());
+    return e.value() > 0;
   }
 
   LocalizationProblem& prob_;
   double L_;
   std::vector<double> x_, prev_, w_, w_next_;
-  detail::NodeLanes lanes_;
+  std::shared_ptr<const detail::NodeLanes> lanes_;  // the phases share one (detail::shared_lanes)
   int levels_;                 // iterations per pass at most (SolverOptions::temporal_block)
   detail::LevelPlan plan_;
   std::vector<double> norms_;  // per level and lane: ||x(k) - x(k-1)||^2, ||x(k)||^2, ||g||^2
   std::vector<double> grad_;   // gradient_rows(), sized on first use
   std::vector<double> inv_d_;  // ml-agd: 1 / D_v per owned node
+  std::array<double, 2 * detail::kMaxLanes> restart_sums_{};  // ml-agd: the kernel's restart sums per lane
   bool stream_ = false;        // non-temporal row stores (kernels.hpp)
   bool w_ready_ = false;
   bool ml_ = false;            // ml-agd: the ML cost's gradient, restarts
   std::int64_t restarts_ = 0;
+  bool exact_restart_tests_ = false;  // SNL_TEST_EXACT_RESTART: every restart test by the exact sum
   std::int64_t k_ = 0;
   double diff_sq_ = 0, x_sq_ = 0, gsq_ = 0;
 };

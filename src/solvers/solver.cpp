@@ -6,8 +6,10 @@
 #include <mpi.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <sstream>
+#include <thread>
 
 #include "core/exact_sum.hpp"
 #include "snl/core/memory.hpp"
@@ -39,6 +41,10 @@ std::string SolverOptions::validate() const {
   if (bb_rounds < 1 || bb_rounds > 10000) return "--bb-rounds must be in [1, 10000]";
   if (!(esdp_rho > 0) || !std::isfinite(esdp_rho)) return "--esdp-rho must be a finite number > 0";
   if (temporal_block < 1 || temporal_block > 64) return "--temporal-block must be in [1, 64]";
+  if (mode != "replay" && mode != "free") return "unknown --mode '" + mode + "' (expected replay or free)";
+  if (!(straggler_delay >= 0) || !std::isfinite(straggler_delay)) return "--straggler-delay must be a finite number >= 0";
+  if (straggler_rank < -1) return "--straggler-rank must be >= 0 (or -1: the last rank)";
+  if (!(target_cost >= 0) || !std::isfinite(target_cost)) return "--target-cost must be a finite number >= 0";
   try {
     parse_weights_spec(weights);
     parse_loss_spec(loss);
@@ -93,6 +99,9 @@ std::string SolverOptions::unsupported_option() const {
     if (c.set && !(c.capability == &AlgorithmInfo::measurement_model ? honours_model(*a, *this) : a->*c.capability))
       return std::string(c.option) + " is not honoured by --algorithm " + algorithm + " (only by " +
              algorithms_with(c.capability) + "); leave it out or give its default " + c.default_value;
+  if (mode != defaults.mode && !a->free_mode)
+    return "--mode is not honoured by --algorithm " + algorithm + " (only by " +
+           algorithms_with(&AlgorithmInfo::free_mode) + "); leave it out or give its default " + defaults.mode;
   if (smooth_iter != defaults.smooth_iter && a->id != AlgorithmId::kDvPipeline)
     return "--smooth-iter is not honoured by --algorithm " + algorithm +
            " (only by dv-pipeline); leave it out or give its default " + std::to_string(defaults.smooth_iter);
@@ -145,9 +154,16 @@ std::string Summary::brief_report() const {
   return os.str();
 }
 
+int straggler_rank(const SolverOptions& opt, MPI_Comm comm) {
+  return opt.straggler_rank >= 0 ? opt.straggler_rank : comm_size(comm) - 1;
+}
+
 Solver::Solver(LocalizationProblem& prob, SolverOptions opt) : prob_(prob), opt_(std::move(opt)) {
   const std::string err = opt_.validate();
   if (!err.empty()) throw Error(err);
+  if (opt_.straggler_rank >= comm_size(prob_.comm()))
+    throw Error("--straggler-rank " + std::to_string(opt_.straggler_rank) + ": the run has only " +
+                std::to_string(comm_size(prob_.comm())) + " ranks");
   // The measurement model every phase and cost uses; --weights auto means
   // none for a method that cannot honour weights (explicit values are refused).
   opt_ = opt_.resolved();
@@ -184,6 +200,7 @@ class Solver::Run {
     // The grown schedule (large networks, automatic intervals): the test's
     // interval grows from stop_every with the iterations done (test_interval),
     // and a record falls on every record_tests-th one; 0: fixed intervals.
+    bool free_early = false;    // a free-running method stopped its last pass by its own test
     double test_cost = 0;
     std::int64_t record_tests = 0;
     double prev_obj = 0;        // for check_monotone
@@ -201,6 +218,7 @@ class Solver::Run {
     bool signalled = false;  // a stop signal on some rank
     bool clock = false;      // rank 0's checkpoint clock ran out
     double rel_grad = NAN;   // --stop gradient, where tested
+    double objective = NAN;  // --target-cost, where tested
   };
 
   bool add_stop_terms(Phase& ph, bool with_grad, bool exact, detail::ExactSum* sums);
@@ -384,6 +402,12 @@ void Solver::Run::set_pass_sizes(Phase& ph) const {
   // record and checkpoint iteration (so these see the same iterates); the
   // automatic record interval becomes a multiple of the pass.
   ph.block = std::max(1, std::min(opt_.temporal_block, ph.alg->max_levels()));
+  if (ph.alg->free_running()) {
+    // One pass to the end of the phase (no synchronisation between its
+    // iterations), cut only by explicit records (--history-every) and checkpoints.
+    ph.block = std::max<std::int64_t>(1, std::min<std::int64_t>(ph.cap, 1 << 30));
+    if (opt_.history_every <= 0) every = std::max<std::int64_t>(1, ph.cap);
+  }
   if (opt_.history_every <= 0) every = (every + ph.block - 1) / ph.block * ph.block;
   ph.every = every;
   // The gradient test (an exchange, a pass over the edges) at records (which
@@ -418,6 +442,7 @@ bool Solver::Run::test_due(const Phase& ph) const {
   // A phase capped below --max-iter (dv-pipeline's smoothing and settling)
   // runs its iterations: its stopping rule could only end it early, and its
   // tests would cost more than they save.
+  if (ph.free_early) return true;  // its own test fired: the Solver's exact test decides
   if (ph.cap < opt_.max_iter) return false;
   return ph.k % test_interval(ph) == 0 || ph.k == ph.cap;
 }
@@ -435,6 +460,7 @@ bool Solver::Run::pass(Phase& ph) {
     r.rel_grad = relative_gradient(ph);
     ++sum_.gradient_tests;
   }
+  if (opt_.target_cost > 0 && r.finite && test_due(ph)) r.objective = objective_of(*ph.alg);
   ph.stop_time += MPI_Wtime() - t0;
   if (!r.finite) return stop(ph, TerminationType::kFailure, "non-finite iterate");
   const bool converged = test_stop(ph, r);
@@ -466,6 +492,10 @@ std::int64_t Solver::Run::pass_length(const Phase& ph) const {
 
 void Solver::Run::iterate(Phase& ph, std::int64_t n) {
   test_delay("SNL_TEST_ITERATION_DELAY", static_cast<double>(n));  // tests/slurm: a job of known length
+  const bool free = ph.alg->free_running();
+  // --straggler-delay: one rank slowed per iteration (a free-running method sleeps per its own iterations).
+  if (opt_.straggler_delay > 0 && !free && comm_rank(comm_) == straggler_rank(opt_, comm_))
+    std::this_thread::sleep_for(std::chrono::duration<double>(opt_.straggler_delay * static_cast<double>(n)));
   const double w0 = halo_.wait_seconds(), ti = MPI_Wtime();
   // A rank-local failure (std::bad_alloc) while the others wait in the
   // iteration's collectives cannot be agreed on: it aborts every rank.
@@ -475,6 +505,11 @@ void Solver::Run::iterate(Phase& ph, std::int64_t n) {
   });
   ph.time += MPI_Wtime() - ti;
   iter_wait_ += halo_.wait_seconds() - w0;
+  if (free) {
+    const std::int64_t ran = ph.alg->levels_run();
+    ph.free_early = ran < n;
+    n = ran;
+  }
   ph.k += n;
   total_it_ += n;
   for (std::int64_t i = 0; i < n; ++i) {  // summed as one iteration at a time
@@ -616,6 +651,10 @@ bool Solver::Run::test_stop(Phase& ph, const PassResult& r) const {
     }
   } else if (opt_.stop_tol() > 0 && r.rel <= opt_.stop_tol()) {
     ph.msg = "relative improvement " + std::to_string(r.rel) + " <= tol";
+    return true;
+  }
+  if (r.objective <= opt_.target_cost) {  // NaN (not tested) compares false
+    ph.msg = "objective " + std::to_string(r.objective) + " <= --target-cost";
     return true;
   }
   if (opt_.grad_tol > 0 && std::isfinite(ph.alg->grad_norm_sq()) && r.gnorm <= opt_.grad_tol) {

@@ -16,3 +16,17 @@ cmake -S "$SNL_SOURCE_DIR/tests/consumer" -B "$T/consumer" -DCMAKE_PREFIX_PATH="
 cmake --build "$T/consumer" > "$T/log" 2>&1 || { cat "$T/log"; fail "consumer did not build"; }
 "$T/consumer/consumer" || fail "consumer run failed"
 "$T/prefix/bin/snl" --version
+# The Python package, where the build has it: importable from the prefix alone
+# (no build tree on the path), finding the installed libsnl, and solving.
+if [ -f "$SNL_BUILD_DIR/python/snl/__init__.py" ]; then
+  init=$(find "$T/prefix" -path '*/site-packages/snl/__init__.py' | head -1)
+  [ -n "$init" ] || fail "the snl Python package is not installed"
+  site=$(dirname "$(dirname "$init")")
+  (cd "$T" && env -u PYTHONPATH PYTHONPATH="$site" "$PY" -c "
+import sys, snl
+assert snl.__file__.startswith(sys.argv[1]), snl.__file__
+r = snl.solve(snl.generate(60, seed=1))
+assert r.positions.shape == (60, 2) and r.summary['rmse'] < 0.05, r.summary['rmse']
+print('installed snl Python package:', snl.__file__)
+" "$T/prefix") || fail "the installed snl Python package does not import or solve"
+fi

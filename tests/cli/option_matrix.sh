@@ -1,16 +1,18 @@
 #!/usr/bin/env bash
 # Options only some algorithms honour (--grad-tol, --temporal-block, --bb-rounds,
-# --esdp-rho), against every distributed algorithm. The expected capabilities are
+# --esdp-rho, --mode), against every distributed algorithm. The expected capabilities are
 # written out here, from what the methods do (a gradient norm: relaxation and both
 # BBs; several iterations per pass: relaxation and MM; consensus rounds: both BBs;
-# an ADMM penalty: esdp-dist), independently of the registry
+# an ADMM penalty: esdp-dist; unsynchronised activations: async and async-exact),
+# independently of the registry
 # (the centralized relaxations, which refuse all three, are tested in sdp_relaxations.sh):
 #  - refused pair: exit 2 with one "snl: error:" line naming the option, on 1 and
 #    2 ranks, an existing output left untouched and no JSON written; the
 #    option at its default value is accepted;
 #  - accepted pair: the option has an effect (--grad-tol large stops earlier,
 #    --temporal-block 4 records at pass ends with the same positions,
-#    --bb-rounds changes the communications, --esdp-rho changes the positions).
+#    --bb-rounds changes the communications, --esdp-rho changes the positions,
+#    --mode free runs the free mode: its summary says so).
 source "$(dirname "$0")/common.bash"
 "$SNL" generate -o "$T/net.h5" --sensors 150 --avg-degree 7 --sigma 0.05 --seed 11 -q
 "$SNL" solve "$T/net.h5" -o "$T/keep.h5" --max-iter 5 --tol 0 -q
@@ -22,9 +24,10 @@ declare -A HONOURED=(
   [temporal-block]="relaxation mm pipeline"
   [bb-rounds]="bb bb-calafiore"
   [esdp-rho]="esdp-dist"
+  [mode]="async async-exact"
 )
-declare -A VALUE=([grad-tol]=1e6 [temporal-block]=4 [bb-rounds]=5 [esdp-rho]=3)
-declare -A DEFAULT=([grad-tol]=0 [temporal-block]=1 [bb-rounds]=20 [esdp-rho]=1)
+declare -A VALUE=([grad-tol]=1e6 [temporal-block]=4 [bb-rounds]=5 [esdp-rho]=3 [mode]=free)
+declare -A DEFAULT=([grad-tol]=0 [temporal-block]=1 [bb-rounds]=20 [esdp-rho]=1 [mode]=replay)
 
 json() { "$PY" -c "import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])" "$@"; }
 history_len() { "$PY" -c "import h5py,sys; print(len(h5py.File(sys.argv[1])['history/iteration']))" "$1"; }
@@ -58,6 +61,9 @@ check_effect() {  # check_effect OPTION ALG
       solve "$base" "$alg" --max-iter 20 --tol 0
       solve "$with" "$alg" --max-iter 20 --tol 0 --esdp-rho "${VALUE[$opt]}"
       ! h5diff -q "$T/$base.h5" "$T/$with.h5" /positions > /dev/null || fail "--esdp-rho did not change the positions of $alg" ;;
+    mode)
+      solve "$with" "$alg" --max-iter 5 --tol 0 --mode "${VALUE[$opt]}"
+      [ "$(json "$T/$with.json" async_mode)" = free ] || fail "--mode free did not run $alg in free mode" ;;
   esac
 }
 
@@ -82,7 +88,7 @@ check_refused() {  # check_refused OPTION ALG
 }
 
 refused=0 accepted=0
-for opt in grad-tol temporal-block bb-rounds esdp-rho; do
+for opt in grad-tol temporal-block bb-rounds esdp-rho mode; do
   for alg in $ALGS; do
     if [[ " ${HONOURED[$opt]} " == *" $alg "* ]]; then
       check_effect "$opt" "$alg"

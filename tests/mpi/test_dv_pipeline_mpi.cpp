@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <mpi.h>
 
+#include <cstdlib>
 #include <cstring>
 
 #include "reference/reference.hpp"
@@ -143,6 +144,12 @@ TEST(MlAgd, MatchesTheReferenceTwin) {
     ASSERT_EQ(o.x.size(), xr.size());
     for (std::size_t t = 0; t < xr.size(); ++t) EXPECT_NEAR(o.x[t], xr[t], 1e-9) << "seed " << seed << " " << t;
     restarted += test::method_value(o.s, "restarts") > 0;
+    // The restart test's plain sums with their rounding bound decide as the exact sum does.
+    setenv("SNL_TEST_EXACT_RESTART", "1", 1);
+    const test::Outcome exact = test::solve_outcome(MPI_COMM_WORLD, w, opt);
+    unsetenv("SNL_TEST_EXACT_RESTART");
+    ASSERT_EQ(exact.x.size(), o.x.size());
+    EXPECT_EQ(0, std::memcmp(exact.x.data(), o.x.data(), o.x.size() * sizeof(double))) << "seed " << seed;
     // Lower than the start.
     EXPECT_LT(reference::ml_cost(merged(w), o.x), reference::ml_cost(merged(w), x0)) << "seed " << seed;
   }

@@ -166,6 +166,51 @@ TEST_P(KernelsByDim, SimdRelaxationStepEqualsScalarBitForBit) {
   }
 }
 
+// ml-agd's step (RelaxStep::ml, inv_d, restart): the same bits on the scalar
+// and the SIMD path, and the restart sums are the sums of the per-node terms
+// q_v = sum_c (w - x(k))_c (x(k) - x(k-1))_c / inv_d[v] over the nodes with
+// inv_d[v] > 0 (some are 0 here), and of their absolute values.
+TEST_P(KernelsByDim, MlStepRestartSumsAreThePerNodeTerms) {
+  auto w = awkward_rows(prob, 4), x = awkward_rows(prob, 5);
+  for (auto* r : {&w, &x})  // finite rows (the awkward ones make every sum NaN), node 10 still on its neighbour
+    for (auto& v : *r)
+      if (!std::isfinite(v)) v = 0.25;
+  const LocalId n = prob.num_owned();
+  std::vector<double> inv_d(static_cast<std::size_t>(n), 0.0);
+  for (LocalId v = 0; v < n; ++v) inv_d[v] = v % 7 == 3 ? 0.0 : 1.0 / (3.0 + v % 5);
+  std::vector<double> ref_xn;
+  for (bool simd : {false, true}) {
+    if (simd && !have_simd()) continue;
+    std::vector<double> xn(w.size(), -7.0), wn(w.size(), -7.0), norms(24, 0.0), rs(2 * detail::kMaxLanes, 0.0);
+    const bool had = detail::set_simd_enabled(simd);
+    const detail::RelaxStep st{w.data(), x.data(), xn.data(), wn.data(), 1.7, 0.6, norms.data(), false, true,
+                               inv_d.data(), rs.data()};
+    detail::relax_chunks(prob, nl, 0, nl.split, st);
+    detail::relax_chunks(prob, nl, nl.split, nl.size(), st);
+    detail::set_simd_enabled(had);
+    if (simd) EXPECT_TRUE(same_bits(xn, ref_xn)) << "x(k) differs between the scalar and the SIMD path";
+    ref_xn = xn;
+    double s = 0, a = 0, got_s = 0, got_a = 0;
+    for (LocalId v = 0; v < n; ++v) {
+      if (!(inv_d[v] > 0)) continue;
+      double t = 0;
+      for (int c = 0; c < dim; ++c) {
+        const std::size_t i = std::size_t(v) * dim + c;
+        t += (w[i] - xn[i]) * (xn[i] - x[i]);
+      }
+      s += t / inv_d[v];
+      a += std::fabs(t / inv_d[v]);
+    }
+    for (int L = 0; L < nl.lanes; ++L) {
+      got_s += rs[std::size_t(L)];
+      got_a += rs[std::size_t(nl.lanes + L)];
+    }
+    EXPECT_GT(a, 0);
+    EXPECT_NEAR(got_s, s, 1e-12 * a) << "simd " << simd;
+    EXPECT_NEAR(got_a, a, 1e-12 * a) << "simd " << simd;
+  }
+}
+
 TEST_P(KernelsByDim, DiskResidualIsZeroInsideAndOnTheBoundary) {
   // e(z, rho) = max(0, 1 - rho/|z|) z: with every range set to exactly the
   // computed |z| (boundary) or larger (inside), and z = 0 for coincident rows,
@@ -248,9 +293,9 @@ TEST_P(KernelsByDim, SimdMMStepEqualsScalarBitForBit) {
 
 // mm-accel's extrapolating step (MMStep::ya): forming ya + beta (ya - yb) in
 // the kernel gives the bits of a separate blend pass followed by the in-place
-// step, on the scalar and the SIMD path (AVX2 or AVX-512, the layout's), every
-// real slot, x(t+1), the anchor variables and the norms; ya and yb are not
-// written.
+// step, on the scalar and the SIMD path (AVX2 or AVX-512, the layout's), with
+// y's regular and non-temporal stores (MMStep::stream_y), every real slot,
+// x(t+1), the anchor variables and the norms; ya and yb are not written.
 TEST_P(KernelsByDim, ExtrapolatingMMStepEqualsBlendThenStep) {
   std::mt19937_64 gen(13);
   std::uniform_real_distribution<double> u(-1, 1);
@@ -262,7 +307,8 @@ TEST_P(KernelsByDim, ExtrapolatingMMStepEqualsBlendThenStep) {
   for (auto& v : aw0) v = u(gen);
   const double beta = 0.7;
   const auto& off = prob.graph().offsets();
-  for (bool simd : {false, true}) {
+  for (int path = 0; path < 3; ++path) {
+    const bool simd = path > 0, stream = path == 2;
     if (simd && !have_simd()) continue;
     const bool had = detail::set_simd_enabled(simd);
     auto step = [&](bool fused, std::vector<double>* y, std::vector<double>* aw, std::vector<double>* xn,
@@ -278,6 +324,7 @@ TEST_P(KernelsByDim, ExtrapolatingMMStepEqualsBlendThenStep) {
         st.ya = ycur.data();
         st.yb = yprev.data();
         st.beta = beta;
+        st.stream_y = stream;
       }
       detail::mm_chunks(prob, nl, 0, nl.split, st);
       detail::mm_chunks(prob, nl, nl.split, nl.size(), st);
@@ -287,10 +334,10 @@ TEST_P(KernelsByDim, ExtrapolatingMMStepEqualsBlendThenStep) {
     step(true, &yf, &awf, &xf, &nf);
     step(false, &yb, &awb, &xb, &nb);
     detail::set_simd_enabled(had);
-    EXPECT_TRUE(same_bits(xf, xb)) << "simd " << simd;
-    EXPECT_TRUE(same_bits(awf, awb)) << "simd " << simd;
-    EXPECT_TRUE(same_bits(nf, nb)) << "simd " << simd;
-    EXPECT_TRUE(same_bits(ycur, ycur0) && same_bits(yprev, yprev0)) << "simd " << simd;
+    EXPECT_TRUE(same_bits(xf, xb)) << "path " << path;
+    EXPECT_TRUE(same_bits(awf, awb)) << "path " << path;
+    EXPECT_TRUE(same_bits(nf, nb)) << "path " << path;
+    EXPECT_TRUE(same_bits(ycur, ycur0) && same_bits(yprev, yprev0)) << "path " << path;
     int differs = 0;
     for (LocalId v = 0; v < prob.num_owned(); ++v)
       for (auto e = off[v]; e < off[v + 1]; ++e)
@@ -299,7 +346,7 @@ TEST_P(KernelsByDim, ExtrapolatingMMStepEqualsBlendThenStep) {
           differs += !same_bits(yf[at], yb[at]);
           differs += yf[at] == -3.0;  // every real slot written
         }
-    EXPECT_EQ(differs, 0) << "simd " << simd;
+    EXPECT_EQ(differs, 0) << "path " << path;
   }
 }
 

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <mpi.h>
 
+#include <cstdlib>
 #include <cstring>
 
 #include "solve_helpers.hpp"
@@ -35,7 +36,41 @@ Summary solve(const Network& w, const std::string& alg, int iters, const std::st
   return solver.solve(random_initial_positions(prob, 5), nullptr);
 }
 
+// Positions after `iters` iterations with sparse records (so that no record
+// asks for the exact costs between the acceptance tests).
+std::vector<double> positions_after(const Network& w, int iters, const char* sums) {
+  setenv("SNL_TEST_ACCEPT", sums, 1);
+  LocalizationProblem prob(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kMetis, nullptr);
+  SolverOptions opt;
+  opt.algorithm = "mm-accel";
+  opt.max_iter = iters;
+  opt.tol = 0;
+  opt.history_every = 1000000;
+  Solver solver(prob, opt);
+  std::vector<double> x;
+  solver.solve(random_initial_positions(prob, 5), &x);
+  unsetenv("SNL_TEST_ACCEPT");
+  return x;
+}
+
 }  // namespace
+
+// The acceptance test on plain sums with their rounding bounds decides as the
+// exact sums do (mm_accel.cpp, accepts; plain from 10,000 sensors, chosen here
+// by SNL_TEST_ACCEPT): the same bits with every test on the exact sums, from
+// rough starts to convergence (where F and f barely move).
+TEST(MMAccel, PlainSumsDecideAsTheExactOnes) {
+  for (std::uint64_t seed = 1; seed <= 8; ++seed) {
+    const double sigmas[] = {0.0, 0.01, 0.05, 0.2};
+    const int dim = seed % 4 == 0 ? 3 : 2;
+    const Network w = make_network({.n = GlobalId(60 + 20 * seed), .dim = dim, .radius = dim == 3 ? 0.45 : 0.3,
+                                    .anchor_radius = 0.35, .sigma = sigmas[seed % 4], .seed = seed});
+    const int iters = seed % 2 ? 3000 : 300;
+    const auto plain = positions_after(w, iters, "plain"), exact = positions_after(w, iters, "exact");
+    ASSERT_EQ(plain.size(), exact.size());
+    EXPECT_EQ(0, std::memcmp(plain.data(), exact.data(), plain.size() * sizeof(double))) << "seed " << seed;
+  }
+}
 
 TEST(MMAccel, MonotoneOverManyRandomNetworks) {
   int faster = 0, cases = 0;

@@ -204,3 +204,34 @@ TEST(Solver, RejectsBadOptions) {
   o.max_iter = -5;
   EXPECT_NE(o.validate(), "");
 }
+
+// The phases share the problem's lane layout (detail::shared_lanes), which
+// holds the ranges: after resample_ranges a solve on the same problem equals
+// one on a fresh problem with the same ranges, bit for bit, and the layout is
+// one object across phases.
+TEST(SharedLanes, OneLayoutPerProblemRebuiltWhenTheRangesChange) {
+  const Network w = make_network({.n = 120, .dim = 2, .radius = 0.3, .anchor_radius = 0.35, .sigma = 0.01, .seed = 7});
+  SolverOptions opt;
+  opt.algorithm = "pipeline";
+  opt.refine = "mm-accel";
+  opt.max_iter = 40;
+  opt.tol = 0;
+  opt.history_every = 1000000;
+  auto solve = [&](LocalizationProblem& prob) {
+    Solver s(prob, opt);
+    std::vector<double> x;
+    s.solve(random_initial_positions(prob, 3), &x);
+    return allgather_positions(prob, x);
+  };
+  LocalizationProblem reused(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kMetis, nullptr);
+  solve(reused);  // lays out the file's ranges
+  const auto first = detail::shared_lanes(reused);
+  EXPECT_EQ(first.get(), detail::shared_lanes(reused).get());
+  reused.resample_ranges(0.05, 11);
+  EXPECT_NE(first.get(), detail::shared_lanes(reused).get());
+  LocalizationProblem fresh(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kMetis, nullptr);
+  fresh.resample_ranges(0.05, 11);
+  const auto a = solve(reused), b = solve(fresh);
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(double)));
+}

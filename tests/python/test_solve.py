@@ -120,6 +120,12 @@ def test_track_is_solve_from_the_previous_positions():
     assert same_bits(rw[0].positions, first.positions)
     assert rw[1].summary["algorithm"] == "ml-agd"
     assert same_bits(rw[1].positions, snl.solve(frames[1], algorithm="ml-agd", max_iter=200, init=first).positions)
+    # warm_tol: the --tol of the frames after the first.
+    rt = snl.track(frames, algorithm="mm-accel", warm_algorithm="ml-agd", warm_tol=1e-2, max_iter=200)
+    assert same_bits(rt[0].positions, first.positions)
+    loose = snl.solve(frames[1], algorithm="ml-agd", max_iter=200, tol=1e-2, init=first)
+    assert same_bits(rt[1].positions, loose.positions)
+    assert rt[1].summary["iterations"] < rw[1].summary["iterations"]
 
 
 def test_init_file_matches_cli(tmp_path):

@@ -6,6 +6,7 @@
 #include <mpi.h>
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -83,6 +84,12 @@ class LocalizationProblem {
   /// Bytes held by this rank's problem arrays (capacities; graph included).
   std::int64_t memory_bytes() const;
 
+  /// Internal: arrays derived from the problem that the phases of a solve
+  /// share instead of building each their own (the kernels' lane layout,
+  /// detail::shared_lanes), made by their first user and dropped when the
+  /// ranges change (resample_ranges).
+  std::shared_ptr<void>& derived_cache() const { return derived_cache_; }
+
   /// Monte Carlo over noise: replaces every range by |true distance +
   /// sigma N(0,1)| (003 eq. 28), the noise keyed by (seed, pair) so that both
   /// ends of an edge and any number of ranks draw the same value. Needs truth.
@@ -118,6 +125,7 @@ class LocalizationProblem {
   std::vector<double> sensor_sigmas_, anchor_sigmas_;
   MeasurementModel model_;
   int delta_max_ = 0, max_anchor_deg_ = 0;
+  mutable std::shared_ptr<void> derived_cache_;
 };
 
 }  // namespace snl

@@ -38,6 +38,8 @@ struct AlgorithmInfo {
   bool one_shot = false;
   /// An ADMM method: honours --esdp-rho (its penalty) and stops only by --stop papers.
   bool admm = false;
+  /// Honours --mode free (async, async-exact: ranks activate their own nodes unsynchronised).
+  bool free_mode = false;
 };
 
 /// Every method, in the order of the CLI help.

@@ -106,6 +106,18 @@ struct SolverOptions {
   bool check_monotone = true;
 #endif
   std::uint64_t seed = 1;
+  /// async, async-exact: replay (the sequential activation order, bit for
+  /// bit, any rank count) or free (each rank activates its own nodes on its own
+  /// clock, rows sent with nonblocking messages; not reproducible; docs/async.md).
+  std::string mode = "replay";
+  /// Test option: the rank `straggler_rank` (-1: the last) sleeps this many
+  /// seconds per iteration (free mode: per n_own activations of its own).
+  double straggler_delay = 0;
+  int straggler_rank = -1;
+  /// Benchmark option: stop a phase once its objective (f_hat for the
+  /// relaxation and async) is at or below this, tested where the stopping
+  /// rule is tested (free mode: also its own estimate); 0: off.
+  double target_cost = 0;
   /// Weights of the ML cost (weights.hpp): file | multiplicative:NF | none, or
   /// auto (file when the network has sigmas, else none).
   std::string weights = "auto";
@@ -182,6 +194,14 @@ class Algorithm {
   virtual void start(const std::vector<double>& x) = 0;
   /// Collective. One iteration of the paper's update.
   virtual void iterate() = 0;
+  /// A free-running method (async --mode free): iterate_levels(n) runs up to n
+  /// iterations on every rank, without synchronising, and may stop earlier by
+  /// its own distributed test; the Solver then runs passes as long as its
+  /// records and checkpoints allow and reads levels_run().
+  virtual bool free_running() const { return false; }
+  /// Free-running methods: the iterations the last iterate_levels() ran (the
+  /// most of any rank; < n when it stopped by its own test or a signal).
+  virtual std::int64_t levels_run() const { return 0; }
   /// Iterations one iterate_levels() call may run (temporal blocking); 1 if none.
   virtual int max_levels() const { return 1; }
   /// Collective. n <= max_levels() iterations, the same iterates as n calls of
@@ -235,6 +255,9 @@ std::unique_ptr<Algorithm> make_sequential_algorithm(const std::string& name, Lo
 /// Deterministic Jones-Plassmann colouring (priorities hashed from global ids; PM's order, pm.cpp):
 /// a colour per local node (owned and ghost); neighbours never share one.
 std::vector<int> jones_plassmann_coloring(DistGraph& g);
+
+/// The rank --straggler-delay slows: --straggler-rank, or the last rank of comm.
+int straggler_rank(const SolverOptions& opt, MPI_Comm comm);
 
 /// Initial point: --init random (uniform in the bounding box of the anchors,
 /// keyed by (seed, global id): the same for any number of ranks). Owned rows.
