@@ -158,7 +158,7 @@ struct SolveKeywords {
 const char* kSolveKeys =
     "max_iter, tol, stop, refine, grad_tol, smooth_iter, settle_iter, seed, partition, history_every, test_every, "
     "bb_rounds, esdp_rho, temporal_block, weights, loss, check_monotone, strict, checkpoint, checkpoint_every, "
-    "checkpoint_seconds, restart";
+    "checkpoint_seconds, restart, mode, straggler_delay, straggler_rank, target_cost";
 
 SolveKeywords parse_keywords(const std::string& algorithm, const py::dict& kw) {
   SolveKeywords k;
@@ -193,6 +193,10 @@ SolveKeywords parse_keywords(const std::string& algorithm, const py::dict& kw) {
     else if (key == "checkpoint_every") k.checkpoint_every = v.cast<std::int64_t>();
     else if (key == "checkpoint_seconds") k.checkpoint_seconds = v.cast<double>();
     else if (key == "restart") k.restart = v.cast<std::string>();
+    else if (key == "mode") o.mode = v.cast<std::string>();
+    else if (key == "straggler_delay") o.straggler_delay = v.cast<double>();
+    else if (key == "straggler_rank") o.straggler_rank = v.cast<int>();
+    else if (key == "target_cost") o.target_cost = v.cast<double>();
     else throw py::type_error("solve() got an unexpected keyword argument '" + key + "' (options: " + kSolveKeys + ")");
     } catch (const py::cast_error&) {
       throw py::type_error("solve(): " + key + " cannot be " + py::repr(v).cast<std::string>());

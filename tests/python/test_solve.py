@@ -64,6 +64,23 @@ def test_options_as_keywords_match_cli(tmp_path):
                                    stop="papers", seed=5, partition="metis", refine="mm-accel").positions, cli)
 
 
+def test_async_free_mode_and_target_cost_as_keywords():
+    # Free mode is not reproducible across ranks, but serially a seed repeats
+    # its bits; it reaches the relaxation's cost, and target_cost stops early.
+    net = snl.Network.from_file(BENCH)
+    a = snl.solve(net, algorithm="async", mode="free", max_iter=300, seed=3)
+    b = snl.solve(net, algorithm="async", mode="free", max_iter=300, seed=3)
+    assert same_bits(a.positions, b.positions)
+    assert a.summary["free_epochs_fastest_rank"] == 300
+    replay = snl.solve(net, algorithm="async", max_iter=300, seed=3)  # the replay: its own draws, as far
+    assert not same_bits(a.positions, replay.positions)
+    assert a.summary["relaxed_cost"] <= 1.05 * replay.summary["relaxed_cost"] < a.summary["initial_cost"] / 100
+    relax = snl.solve(net, algorithm="relaxation", tol=1e-9, max_iter=20000)
+    target = 2 * relax.summary["relaxed_cost"]
+    t = snl.solve(net, algorithm="relaxation", max_iter=20000, tol=0, target_cost=target, straggler_delay=0.0)
+    assert t.summary["iterations"] < 20000 and t.summary["relaxed_cost"] <= target
+
+
 def test_summary_and_history():
     net = snl.Network.from_file(BENCH)
     r = snl.solve(net, algorithm="pipeline", max_iter=200)
