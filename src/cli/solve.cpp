@@ -347,6 +347,7 @@ std::string json_summary(const SolveCommand& cmd, const LoadedProblem& lp, const
       .add("stop_test_seconds", s.stop_test_seconds)
       .add("record_seconds", s.record_seconds)
       .add("gradient_tests", s.gradient_tests)
+      .add("gradient_tests_bounded", s.gradient_tests_bounded)
       .add("iterate_wait_fraction", s.iterate_seconds > 0 ? s.iterate_wait_seconds / s.iterate_seconds : 0.0)
       .add("peak_rss_bytes_total", static_cast<std::int64_t>(m.tot[0]))
       .add("peak_rss_bytes_max", static_cast<std::int64_t>(m.mx[0]))

@@ -10,43 +10,22 @@ constexpr int kDeltaTag = 7402;
 }  // namespace
 
 DeltaHalo::DeltaHalo(const HaloPlan& plan, int width)
-    : comm_(plan.comm()), width_(width), n_owned_(plan.num_owned()), neighbors_(plan.neighbor_ranks()) {
+    : comm_(plan.comm()), width_(width), n_owned_(plan.num_owned()), neighbors_(plan.neighbor_ranks()), idx_(plan) {
   const int nn = num_neighbors();
-  send_begin_.assign(nn + 1, 0);
-  for (int r = 0; r < nn; ++r) send_begin_[r + 1] = send_begin_[r] + plan.send_count(r);
-  send_ids_.reserve(send_begin_.back());
-  for (int r = 0; r < nn; ++r) send_ids_.insert(send_ids_.end(), plan.send_ids(r), plan.send_ids(r) + plan.send_count(r));
   LocalId n_ghost = 0;
-  for (int r = 0; r < nn; ++r) {
-    recv_offset_.push_back(plan.recv_offset(r));
-    recv_count_.push_back(plan.recv_count(r));
-    n_ghost = std::max(n_ghost, plan.recv_offset(r) + plan.recv_count(r));
-  }
+  for (int r = 0; r < nn; ++r) n_ghost = std::max(n_ghost, plan.recv_offset(r) + plan.recv_count(r));
   ghost_source_.assign(n_ghost, -1);
   for (int r = 0; r < nn; ++r)
-    std::fill(ghost_source_.begin() + recv_offset_[r], ghost_source_.begin() + recv_offset_[r] + recv_count_[r], r);
-  // Each owned row's (neighbour, slot) pairs, grouped by row.
-  mark_begin_.assign(std::size_t(n_owned_) + 1, 0);
-  for (LocalId v : send_ids_) ++mark_begin_[v + 1];
-  for (LocalId v = 0; v < n_owned_; ++v) mark_begin_[v + 1] += mark_begin_[v];
-  mark_rank_.resize(send_ids_.size());
-  mark_slot_.resize(send_ids_.size());
-  std::vector<std::int64_t> fill(mark_begin_.begin(), mark_begin_.end() - 1);
-  for (int r = 0; r < nn; ++r)
-    for (auto t = send_begin_[r]; t < send_begin_[r + 1]; ++t) {
-      const LocalId v = send_ids_[t];
-      mark_rank_[fill[v]] = r;
-      mark_slot_[fill[v]++] = static_cast<LocalId>(t - send_begin_[r]);
-    }
+    std::fill(ghost_source_.begin() + idx_.recv_offset[r], ghost_source_.begin() + idx_.recv_offset[r] + idx_.recv_count[r], r);
   dirty_.assign(n_owned_, 0);
-  pending_.assign(send_ids_.size(), 0);
-  pending_begin_.assign(send_begin_.begin(), send_begin_.end() - 1);
+  pending_.assign(idx_.send_ids.size(), 0);
+  pending_begin_.assign(idx_.send_begin.begin(), idx_.send_begin.end() - 1);
   pending_count_.assign(nn, 0);
   buf_begin_send_.assign(nn + 1, 0);
   buf_begin_recv_.assign(nn + 1, 0);
   for (int r = 0; r < nn; ++r) {
     buf_begin_send_[r + 1] = buf_begin_send_[r] + 2 + std::int64_t(plan.send_count(r)) * (2 + width_);
-    buf_begin_recv_[r + 1] = buf_begin_recv_[r] + 2 + std::int64_t(recv_count_[r]) * (2 + width_);
+    buf_begin_recv_[r + 1] = buf_begin_recv_[r] + 2 + std::int64_t(idx_.recv_count[r]) * (2 + width_);
   }
   send_buf_.assign(buf_begin_send_.back(), 0.0);
   recv_buf_.assign(buf_begin_recv_.back(), 0.0);
@@ -58,7 +37,7 @@ DeltaHalo::DeltaHalo(const HaloPlan& plan, int width)
 void DeltaHalo::reset(std::int64_t clock, std::int64_t stop) {
   if (in_flight_) throw Error("delta halo: reset() while an exchange is in flight");
   for (int r = 0; r < num_neighbors(); ++r) {
-    for (LocalId j = 0; j < pending_count_[r]; ++j) dirty_[send_ids_[send_begin_[r] + pending_[pending_begin_[r] + j]]] = 0;
+    for (LocalId j = 0; j < pending_count_[r]; ++j) dirty_[idx_.send_ids[idx_.send_begin[r] + pending_[pending_begin_[r] + j]]] = 0;
     pending_count_[r] = 0;
     clock_[r] = clock;
     active_[r] = 1;
@@ -87,7 +66,7 @@ void DeltaHalo::begin(const double* field, const std::int64_t* tags, std::int64_
     out[0] = static_cast<double>(clock);
     out[1] = static_cast<double>(cnt);
     double* o = out + 2;
-    const LocalId* ids = send_ids_.data() + send_begin_[r];
+    const LocalId* ids = idx_.send_ids.data() + idx_.send_begin[r];
     const LocalId* slots = pending_.data() + pending_begin_[r];
     for (LocalId j = 0; j < cnt; ++j) {
       const LocalId v = ids[slots[j]];
@@ -104,7 +83,7 @@ void DeltaHalo::begin(const double* field, const std::int64_t* tags, std::int64_
   }
   // The marks are spent: a row changed from here on goes in the next round.
   for (int r = 0; r < nn; ++r) {
-    const LocalId* ids = send_ids_.data() + send_begin_[r];
+    const LocalId* ids = idx_.send_ids.data() + idx_.send_begin[r];
     for (LocalId j = 0; j < pending_count_[r]; ++j) dirty_[ids[pending_[pending_begin_[r] + j]]] = 0;
   }
   // Rows marked for an inactive neighbour (none: a pair stops only when both
@@ -123,10 +102,10 @@ void DeltaHalo::end(double* field, std::int64_t* tags) {
     clock_[r] = static_cast<std::int64_t>(in[0]);
     const auto cnt = static_cast<LocalId>(in[1]);
     const double* q = in + 2;
-    double* base = field + (std::size_t(n_owned_) + recv_offset_[r]) * width_;
+    double* base = field + (std::size_t(n_owned_) + idx_.recv_offset[r]) * width_;
     for (LocalId j = 0; j < cnt; ++j) {
       const auto slot = static_cast<LocalId>(*q++);
-      tags[std::size_t(n_owned_) + recv_offset_[r] + slot] = static_cast<std::int64_t>(*q++);
+      tags[std::size_t(n_owned_) + idx_.recv_offset[r] + slot] = static_cast<std::int64_t>(*q++);
       double* dst = base + std::size_t(slot) * width_;
       for (int c = 0; c < width_; ++c) dst[c] = *q++;
     }
@@ -138,12 +117,11 @@ void DeltaHalo::end(double* field, std::int64_t* tags) {
 }
 
 std::int64_t DeltaHalo::memory_bytes() const {
-  return static_cast<std::int64_t>(
-      (send_ids_.capacity() + mark_slot_.capacity() + pending_.capacity() + recv_offset_.capacity() +
-       recv_count_.capacity() + pending_count_.capacity()) * sizeof(LocalId) +
-      (send_begin_.capacity() + mark_begin_.capacity() + pending_begin_.capacity() + buf_begin_send_.capacity() +
-       buf_begin_recv_.capacity() + clock_.capacity()) * sizeof(std::int64_t) +
-      (mark_rank_.capacity() + ghost_source_.capacity() + neighbors_.capacity()) * sizeof(int) +
+  return idx_.bytes() + static_cast<std::int64_t>(
+      (pending_.capacity() + pending_count_.capacity()) * sizeof(LocalId) +
+      (pending_begin_.capacity() + buf_begin_send_.capacity() + buf_begin_recv_.capacity() + clock_.capacity()) *
+          sizeof(std::int64_t) +
+      (ghost_source_.capacity() + neighbors_.capacity()) * sizeof(int) +
       dirty_.capacity() + active_.capacity() + (send_buf_.capacity() + recv_buf_.capacity()) * sizeof(double) +
       requests_.capacity() * sizeof(MPI_Request));
 }

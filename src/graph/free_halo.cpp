@@ -10,38 +10,17 @@ constexpr int kFreeTag = 7403;
 }  // namespace
 
 FreeHalo::FreeHalo(const HaloPlan& plan, int width)
-    : comm_(plan.comm()), width_(width), n_owned_(plan.num_owned()), neighbors_(plan.neighbor_ranks()) {
+    : comm_(plan.comm()), width_(width), n_owned_(plan.num_owned()), neighbors_(plan.neighbor_ranks()), idx_(plan) {
   const int nn = num_neighbors();
-  send_begin_.assign(nn + 1, 0);
-  for (int r = 0; r < nn; ++r) send_begin_[r + 1] = send_begin_[r] + plan.send_count(r);
-  send_ids_.reserve(send_begin_.back());
-  for (int r = 0; r < nn; ++r) send_ids_.insert(send_ids_.end(), plan.send_ids(r), plan.send_ids(r) + plan.send_count(r));
-  for (int r = 0; r < nn; ++r) {
-    recv_offset_.push_back(plan.recv_offset(r));
-    recv_count_.push_back(plan.recv_count(r));
-  }
-  // Each owned row's (neighbour, slot) pairs, grouped by row.
-  mark_begin_.assign(std::size_t(n_owned_) + 1, 0);
-  for (LocalId v : send_ids_) ++mark_begin_[v + 1];
-  for (LocalId v = 0; v < n_owned_; ++v) mark_begin_[v + 1] += mark_begin_[v];
-  mark_rank_.resize(send_ids_.size());
-  mark_slot_.resize(send_ids_.size());
-  std::vector<std::int64_t> fill(mark_begin_.begin(), mark_begin_.end() - 1);
-  for (int r = 0; r < nn; ++r)
-    for (auto t = send_begin_[r]; t < send_begin_[r + 1]; ++t) {
-      const LocalId v = send_ids_[t];
-      mark_rank_[fill[v]] = r;
-      mark_slot_[fill[v]++] = static_cast<LocalId>(t - send_begin_[r]);
-    }
-  dirty_.assign(send_ids_.size(), 0);
-  pending_.assign(send_ids_.size(), 0);
+  dirty_.assign(idx_.send_ids.size(), 0);
+  pending_.assign(idx_.send_ids.size(), 0);
   pending_count_.assign(nn, 0);
   // A message: [last, count, then per row its slot and its values].
   send_buf_begin_.assign(nn + 1, 0);
   recv_buf_begin_.assign(nn + 1, 0);
   for (int r = 0; r < nn; ++r) {
     send_buf_begin_[r + 1] = send_buf_begin_[r] + kSlots * (2 + std::int64_t(plan.send_count(r)) * (1 + width_));
-    recv_buf_begin_[r + 1] = recv_buf_begin_[r] + 2 + std::int64_t(recv_count_[r]) * (1 + width_);
+    recv_buf_begin_[r + 1] = recv_buf_begin_[r] + 2 + std::int64_t(idx_.recv_count[r]) * (1 + width_);
   }
   send_buf_.assign(send_buf_begin_.back(), 0.0);
   recv_buf_.assign(recv_buf_begin_.back(), 0.0);
@@ -96,14 +75,14 @@ bool FreeHalo::send(int r, const double* field, bool last) {
   out[0] = last ? 1.0 : 0.0;
   out[1] = static_cast<double>(cnt);
   double* o = out + 2;
-  const LocalId* ids = send_ids_.data() + send_begin_[r];
-  const LocalId* slots = pending_.data() + send_begin_[r];
+  const LocalId* ids = idx_.send_ids.data() + idx_.send_begin[r];
+  const LocalId* slots = pending_.data() + idx_.send_begin[r];
   for (LocalId j = 0; j < cnt; ++j) {
     const double* src = field + std::size_t(ids[slots[j]]) * width_;
     *o++ = static_cast<double>(slots[j]);
     for (int c = 0; c < width_; ++c) *o++ = src[c];
   }
-  for (LocalId j = 0; j < pending_count_[r]; ++j) dirty_[send_begin_[r] + slots[j]] = 0;
+  for (LocalId j = 0; j < pending_count_[r]; ++j) dirty_[idx_.send_begin[r] + slots[j]] = 0;
   pending_count_[r] = 0;
   const int count = static_cast<int>(o - out);
   MPI_Isend(out, count, MPI_DOUBLE, neighbors_[r], kFreeTag, comm_.get(), &send_req_[std::size_t(r) * kSlots + s]);
@@ -122,7 +101,7 @@ void FreeHalo::apply(int r, double* field) {
   const double* in = recv_buf_.data() + recv_buf_begin_[r];
   const auto cnt = static_cast<LocalId>(in[1]);
   const double* q = in + 2;
-  double* base = field + (std::size_t(n_owned_) + recv_offset_[r]) * width_;
+  double* base = field + (std::size_t(n_owned_) + idx_.recv_offset[r]) * width_;
   for (LocalId j = 0; j < cnt; ++j) {
     const auto slot = static_cast<LocalId>(*q++);
     double* dst = base + std::size_t(slot) * width_;
@@ -163,12 +142,10 @@ void FreeHalo::close(double* field) {
 }
 
 std::int64_t FreeHalo::memory_bytes() const {
-  return static_cast<std::int64_t>(
-      (send_ids_.capacity() + mark_slot_.capacity() + pending_.capacity() + recv_offset_.capacity() +
-       recv_count_.capacity() + pending_count_.capacity()) * sizeof(LocalId) +
-      (send_begin_.capacity() + mark_begin_.capacity() + send_buf_begin_.capacity() + recv_buf_begin_.capacity()) *
-          sizeof(std::int64_t) +
-      (mark_rank_.capacity() + neighbors_.capacity()) * sizeof(int) + dirty_.capacity() + last_seen_.capacity() +
+  return idx_.bytes() + static_cast<std::int64_t>(
+      (pending_.capacity() + pending_count_.capacity()) * sizeof(LocalId) +
+      (send_buf_begin_.capacity() + recv_buf_begin_.capacity()) * sizeof(std::int64_t) +
+      neighbors_.capacity() * sizeof(int) + dirty_.capacity() + last_seen_.capacity() +
       last_sent_.capacity() + (send_buf_.capacity() + recv_buf_.capacity()) * sizeof(double) +
       (send_req_.capacity() + recv_req_.capacity()) * sizeof(MPI_Request));
 }

@@ -37,6 +37,32 @@ HaloPlan::~HaloPlan() { free_requests(); }
 
 HaloPlan::HaloPlan(HaloPlan&& o) noexcept { *this = std::move(o); }
 
+HaloRowIndex::HaloRowIndex(const HaloPlan& plan) {
+  const int nn = plan.num_neighbors();
+  send_begin.assign(nn + 1, 0);
+  for (int r = 0; r < nn; ++r) send_begin[r + 1] = send_begin[r] + plan.send_count(r);
+  send_ids.reserve(send_begin.back());
+  for (int r = 0; r < nn; ++r) send_ids.insert(send_ids.end(), plan.send_ids(r), plan.send_ids(r) + plan.send_count(r));
+  for (int r = 0; r < nn; ++r) {
+    recv_offset.push_back(plan.recv_offset(r));
+    recv_count.push_back(plan.recv_count(r));
+  }
+  // Each owned row's (neighbour, slot) pairs, grouped by row.
+  const LocalId n_owned = plan.num_owned();
+  mark_begin.assign(std::size_t(n_owned) + 1, 0);
+  for (LocalId v : send_ids) ++mark_begin[v + 1];
+  for (LocalId v = 0; v < n_owned; ++v) mark_begin[v + 1] += mark_begin[v];
+  mark_rank.resize(send_ids.size());
+  mark_slot.resize(send_ids.size());
+  std::vector<std::int64_t> fill(mark_begin.begin(), mark_begin.end() - 1);
+  for (int r = 0; r < nn; ++r)
+    for (auto t = send_begin[r]; t < send_begin[r + 1]; ++t) {
+      const LocalId v = send_ids[t];
+      mark_rank[fill[v]] = r;
+      mark_slot[fill[v]++] = static_cast<LocalId>(t - send_begin[r]);
+    }
+}
+
 HaloPlan& HaloPlan::operator=(HaloPlan&& o) noexcept {
   if (this != &o) {
     free_requests();

@@ -235,7 +235,7 @@ SNL_AVX2 void mm_chunks_avx2(const LocalizationProblem& prob, const NodeLanes& n
 // lane (s and z2 from +0.0, then sqrt, sub, mul, add), with the lanes whose
 // slot is not forward adding +0.0 (and-masked), which changes no sum that
 // starts at +0.0. The MM kernel's row loads: the same lane order (0, 2, 1, 3).
-template <int P>
+template <int P, bool kY>
 SNL_AVX2 unsigned mm_cost_chunk_avx2_p(const NodeLanes& nl, std::int64_t c, const double* x, const double* y,
                                        double* F, double* f) {
   const __m256i bits = _mm256_set_epi64x(8, 4, 2, 1);
@@ -245,7 +245,7 @@ SNL_AVX2 unsigned mm_cost_chunk_avx2_p(const NodeLanes& nl, std::int64_t c, cons
   __m256d SF = _mm256_setzero_pd(), Sf = _mm256_setzero_pd();
   const std::int64_t last = nl.groups() - 1;
   for (std::int64_t g = nl.group_off[c]; g < nl.group_off[c + 1]; ++g) {
-    prefetch_group<4, P>(nl, g, last, y);  // as the MM kernel (the chunks are visited in order)
+    if (kY) prefetch_group<4, P>(nl, g, last, y);  // as the MM kernel (the chunks are visited in order)
     prefetch_rows<4, P>(nl, g, last, x);
     const unsigned mask = (nl.real[g] & nl.fwd[g]) & 15u;
     if (!mask) continue;
@@ -256,8 +256,10 @@ SNL_AVX2 unsigned mm_cost_chunk_avx2_p(const NodeLanes& nl, std::int64_t c, cons
     load_rows<P>(x, &nl.adj[g * 4], U);
     for (int k = 0; k < P; ++k) {
       const __m256d Z = _mm256_sub_pd(XV[k], U[k]);
-      const __m256d R = _mm256_sub_pd(Z, _mm256_loadu_pd(y + std::size_t(g * P + k) * 4));
-      S = _mm256_add_pd(S, _mm256_mul_pd(R, R));
+      if (kY) {
+        const __m256d R = _mm256_sub_pd(Z, _mm256_loadu_pd(y + std::size_t(g * P + k) * 4));
+        S = _mm256_add_pd(S, _mm256_mul_pd(R, R));
+      }
       Z2 = _mm256_add_pd(Z2, _mm256_mul_pd(Z, Z));
     }
     const __m256d Mf = _mm256_sub_pd(_mm256_sqrt_pd(Z2), _mm256_loadu_pd(&nl.rho[g * 4]));
@@ -273,7 +275,8 @@ SNL_AVX2 unsigned mm_cost_chunk_avx2_p(const NodeLanes& nl, std::int64_t c, cons
 
 unsigned mm_cost_chunk_avx2(const NodeLanes& nl, int p, std::int64_t c, const double* x, const double* y,
                             double* F, double* f) {
-  return p == 2 ? mm_cost_chunk_avx2_p<2>(nl, c, x, y, F, f) : mm_cost_chunk_avx2_p<3>(nl, c, x, y, F, f);
+  if (!y) return p == 2 ? mm_cost_chunk_avx2_p<2, false>(nl, c, x, y, F, f) : mm_cost_chunk_avx2_p<3, false>(nl, c, x, y, F, f);
+  return p == 2 ? mm_cost_chunk_avx2_p<2, true>(nl, c, x, y, F, f) : mm_cost_chunk_avx2_p<3, true>(nl, c, x, y, F, f);
 }
 
 const KernelTable kAvx2Kernels = {{relax_chunks_avx2<2>, relax_chunks_avx2<3>},

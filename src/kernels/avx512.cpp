@@ -246,7 +246,7 @@ SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& prob, const NodeLane
 // mm_cost_chunk_avx2_p with 8 lanes: the MM kernel's row loads (lane order
 // (0, 4, 1, 5, ...), the layout's), the scalar twin's arithmetic per lane,
 // and the lanes whose slot is not forward adding +0.0 (zero-masked).
-template <int P>
+template <int P, bool kY>
 SNL_AVX512 unsigned mm_cost_chunk_avx512_p(const NodeLanes& nl, std::int64_t c, const double* x, const double* y,
                                            double* F, double* f) {
   unsigned any = 0;
@@ -255,7 +255,7 @@ SNL_AVX512 unsigned mm_cost_chunk_avx512_p(const NodeLanes& nl, std::int64_t c, 
   __m512d SF = _mm512_setzero_pd(), Sf = _mm512_setzero_pd();
   const std::int64_t last = nl.groups() - 1;
   for (std::int64_t g = nl.group_off[c]; g < nl.group_off[c + 1]; ++g) {
-    prefetch_group<8, P>(nl, g, last, y);  // as the MM kernel (the chunks are visited in order)
+    if (kY) prefetch_group<8, P>(nl, g, last, y);  // as the MM kernel (the chunks are visited in order)
     prefetch_rows<8, P>(nl, g, last, x);
     const __mmask8 M = static_cast<__mmask8>(nl.real[g] & nl.fwd[g]);
     if (!M) continue;
@@ -264,8 +264,10 @@ SNL_AVX512 unsigned mm_cost_chunk_avx512_p(const NodeLanes& nl, std::int64_t c, 
     load_rows8<P>(x, &nl.adj[g * 8], U);
     for (int k = 0; k < P; ++k) {
       const __m512d Z = _mm512_sub_pd(XV[k], U[k]);
-      const __m512d R = _mm512_sub_pd(Z, _mm512_loadu_pd(y + std::size_t(g * P + k) * 8));
-      S = _mm512_add_pd(S, _mm512_mul_pd(R, R));
+      if (kY) {
+        const __m512d R = _mm512_sub_pd(Z, _mm512_loadu_pd(y + std::size_t(g * P + k) * 8));
+        S = _mm512_add_pd(S, _mm512_mul_pd(R, R));
+      }
       Z2 = _mm512_add_pd(Z2, _mm512_mul_pd(Z, Z));
     }
     const __m512d Mf = _mm512_sub_pd(_mm512_sqrt_pd(Z2), _mm512_loadu_pd(&nl.rho[g * 8]));
@@ -281,7 +283,8 @@ SNL_AVX512 unsigned mm_cost_chunk_avx512_p(const NodeLanes& nl, std::int64_t c, 
 
 unsigned mm_cost_chunk_avx512(const NodeLanes& nl, int p, std::int64_t c, const double* x, const double* y,
                               double* F, double* f) {
-  return p == 2 ? mm_cost_chunk_avx512_p<2>(nl, c, x, y, F, f) : mm_cost_chunk_avx512_p<3>(nl, c, x, y, F, f);
+  if (!y) return p == 2 ? mm_cost_chunk_avx512_p<2, false>(nl, c, x, y, F, f) : mm_cost_chunk_avx512_p<3, false>(nl, c, x, y, F, f);
+  return p == 2 ? mm_cost_chunk_avx512_p<2, true>(nl, c, x, y, F, f) : mm_cost_chunk_avx512_p<3, true>(nl, c, x, y, F, f);
 }
 
 const KernelTable kAvx512Kernels = {{relax_chunks_avx512<2>, relax_chunks_avx512<3>},

@@ -251,7 +251,8 @@ void mm_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_
 /// before their factor 1/2. F and f hold C zeros on entry. Returns the lanes
 /// with at least one forward slot. A full chunk (p = 2, 3) takes the SIMD
 /// path of its layout where simd_enabled() (AVX2 for 4 lanes, AVX-512 for
-/// 8); every lane equals the scalar twin bit for bit.
+/// 8); every lane equals the scalar twin bit for bit. y = nullptr: f alone
+/// (F gets +0.0; the solver's bounded gradient test).
 unsigned mm_cost_chunk(const NodeLanes& nl, int p, std::int64_t c, const double* x, const double* y, double* F,
                        double* f);
 

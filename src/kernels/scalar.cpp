@@ -144,8 +144,11 @@ unsigned mm_cost_chunk_p(const NodeLanes& nl, std::int64_t c, const double* x, c
       const double* xu = x + std::size_t(nl.adj[g * C + q]) * P;
       double s = 0, z2 = 0;
       for (int k = 0; k < P; ++k) {
-        const double z = xv[k] - xu[k], r = z - y[std::size_t(g * P + k) * C + L];
-        s += r * r;
+        const double z = xv[k] - xu[k];
+        if (y) {
+          const double r = z - y[std::size_t(g * P + k) * C + L];
+          s += r * r;
+        }
         z2 += z * z;
       }
       const double m = std::sqrt(z2) - nl.rho[g * C + L];

@@ -138,6 +138,7 @@ class Relaxation final : public Algorithm {
     prob_.graph().halo().exchange(x_.data(), prob_.dim());
     return ml_ ? evaluate_ml_cost(prob_, x_.data()) : evaluate_relaxed_cost(prob_, x_.data());
   }
+  bool objective_is_ml_cost() const override { return ml_; }
   void change_norms(double* d, double* s) const override {
     *d = diff_sq_;
     *s = x_sq_;
@@ -151,7 +152,7 @@ class Relaxation final : public Algorithm {
     grad_.resize(std::size_t(prob_.num_owned()) * prob_.dim());
     prob_.graph().halo().exchange(w_next_.data(), prob_.dim());
     if (ml_)
-      ml_cost_and_gradient(prob_, w_next_.data(), grad_.data(), false);
+      ml_gradient(prob_, w_next_.data(), grad_.data(), 0, prob_.num_owned());
     else
       relaxed_gradient(prob_, w_next_.data(), grad_.data(), 0, prob_.num_owned());
     return grad_.data();

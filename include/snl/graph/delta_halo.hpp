@@ -36,11 +36,11 @@ class DeltaHalo {
   void reset(std::int64_t clock, std::int64_t stop);
   /// Owned row v changed since the last exchange (a no-op for rows no rank holds).
   void mark(LocalId v) {
-    if (mark_begin_[v] == mark_begin_[v + 1] || dirty_[v]) return;
+    if (idx_.mark_begin[v] == idx_.mark_begin[v + 1] || dirty_[v]) return;
     dirty_[v] = 1;
-    for (auto t = mark_begin_[v]; t < mark_begin_[v + 1]; ++t) {
-      const int r = mark_rank_[t];
-      pending_[pending_begin_[r] + pending_count_[r]++] = mark_slot_[t];
+    for (auto t = idx_.mark_begin[v]; t < idx_.mark_begin[v + 1]; ++t) {
+      const int r = idx_.mark_rank[t];
+      pending_[pending_begin_[r] + pending_count_[r]++] = idx_.mark_slot[t];
     }
   }
   /// Collective over the active pairs: sends the marked rows of `field` with
@@ -71,14 +71,9 @@ class DeltaHalo {
   int width_ = 0;
   LocalId n_owned_ = 0;
   std::vector<int> neighbors_;
-  std::vector<LocalId> send_ids_;                 // concatenated send lists (the plan's)
-  std::vector<std::int64_t> send_begin_;          // [nn + 1]
-  std::vector<LocalId> recv_offset_, recv_count_;
-  std::vector<std::int64_t> mark_begin_;          // [n_owned + 1] into mark_rank_/mark_slot_
-  std::vector<int> mark_rank_;                    // the neighbours holding the row ...
-  std::vector<LocalId> mark_slot_;                // ... and its place in their send list
+  HaloRowIndex idx_;  // the plan's lists, flat, and each owned row's places in them
   std::vector<char> dirty_;                       // [n_owned]
-  std::vector<LocalId> pending_;                  // marked slots per neighbour, at send_begin_[r]
+  std::vector<LocalId> pending_;                  // marked slots per neighbour, at idx_.send_begin[r]
   std::vector<std::int64_t> pending_begin_;
   std::vector<LocalId> pending_count_;
   std::vector<int> ghost_source_;                 // [num ghosts]

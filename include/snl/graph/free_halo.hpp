@@ -42,12 +42,12 @@ class FreeHalo {
   void open();
   /// Owned row v changed: pending for every neighbour that holds it.
   void mark(LocalId v) {
-    for (auto t = mark_begin_[v]; t < mark_begin_[v + 1]; ++t) {
-      const int r = mark_rank_[t];
-      const auto idx = send_begin_[r] + mark_slot_[t];
+    for (auto t = idx_.mark_begin[v]; t < idx_.mark_begin[v + 1]; ++t) {
+      const int r = idx_.mark_rank[t];
+      const auto idx = idx_.send_begin[r] + idx_.mark_slot[t];
       if (dirty_[idx]) continue;
       dirty_[idx] = 1;
-      pending_[send_begin_[r] + pending_count_[r]++] = mark_slot_[t];
+      pending_[idx_.send_begin[r] + pending_count_[r]++] = idx_.mark_slot[t];
     }
   }
   /// Nonblocking: sends every neighbour with pending rows and a free send
@@ -77,14 +77,9 @@ class FreeHalo {
   int width_ = 0;
   LocalId n_owned_ = 0;
   std::vector<int> neighbors_;
-  std::vector<LocalId> send_ids_;         // concatenated send lists (the plan's)
-  std::vector<std::int64_t> send_begin_;  // [nn + 1]
-  std::vector<LocalId> recv_offset_, recv_count_;
-  std::vector<std::int64_t> mark_begin_;  // [n_owned + 1] into mark_rank_/mark_slot_
-  std::vector<int> mark_rank_;
-  std::vector<LocalId> mark_slot_;
+  HaloRowIndex idx_;  // the plan's lists, flat, and each owned row's places in them
   std::vector<char> dirty_;               // [send list entries]: pending for that neighbour
-  std::vector<LocalId> pending_;          // pending slots per neighbour, at send_begin_[r]
+  std::vector<LocalId> pending_;          // pending slots per neighbour, at idx_.send_begin[r]
   std::vector<LocalId> pending_count_;
   std::vector<double> send_buf_, recv_buf_;
   std::vector<std::int64_t> send_buf_begin_, recv_buf_begin_;  // [nn + 1]; a send buffer r, s at begin + s * size

@@ -93,4 +93,24 @@ class HaloPlan {
   double wait_seconds_ = 0;
 };
 
+/// A plan's send and receive lists as flat arrays, with each owned row's
+/// places in the send lists: what the halos that send only changed rows
+/// (DeltaHalo, FreeHalo) mark and pack by.
+struct HaloRowIndex {
+  HaloRowIndex() = default;
+  explicit HaloRowIndex(const HaloPlan& plan);
+  std::vector<LocalId> send_ids;          ///< concatenated send lists (the plan's)
+  std::vector<std::int64_t> send_begin;   ///< [num_neighbors + 1] into send_ids
+  std::vector<LocalId> recv_offset, recv_count;
+  std::vector<std::int64_t> mark_begin;   ///< [n_owned + 1] into mark_rank / mark_slot
+  std::vector<int> mark_rank;             ///< the neighbours an owned row goes to ...
+  std::vector<LocalId> mark_slot;         ///< ... and its place in their send list
+  std::int64_t bytes() const {
+    return static_cast<std::int64_t>((send_ids.capacity() + recv_offset.capacity() + recv_count.capacity() +
+                                      mark_slot.capacity()) * sizeof(LocalId) +
+                                     (send_begin.capacity() + mark_begin.capacity()) * sizeof(std::int64_t) +
+                                     mark_rank.capacity() * sizeof(int));
+  }
+};
+
 }  // namespace snl

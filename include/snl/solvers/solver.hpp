@@ -169,6 +169,9 @@ struct Summary {
   double stop_test_seconds = 0, record_seconds = 0;
   /// Gradient stopping tests run (--stop gradient), over all phases.
   std::int64_t gradient_tests = 0;
+  /// Of those, the ones settled on plain sums with a rounding bound (the rest
+  /// by exact sums; the outcome is the same either way).
+  std::int64_t gradient_tests_bounded = 0;
   /// Per phase (pipeline: relaxation then mm), same meaning as iterate_seconds.
   std::vector<std::pair<std::string, double>> phase_iterate_seconds;
   /// Algorithm state (iterates, edge variables), all ranks; max over phases.
@@ -213,6 +216,9 @@ class Algorithm {
   virtual const std::vector<double>& positions() const = 0;
   /// Collective: the objective the method minimizes at the current iterate.
   virtual double objective() = 0;
+  /// True when objective() is the ML cost f at positions() (evaluate_ml_cost):
+  /// the Solver then reuses the f its gradient test formed at the same iterate.
+  virtual bool objective_is_ml_cost() const { return false; }
   /// This rank's sums over owned rows of ||x(k)-x(k-1)||^2 and ||x(k)||^2.
   virtual void change_norms(double* diff_sq, double* x_sq) const = 0;
   /// This rank's squared norm of the last gradient computed (NaN if none).
