@@ -26,6 +26,10 @@
 # each), messages per sensor, final ML cost, its excess over the lowest cost of
 # the rows (relative), RMSE, and RMSE over the CRLB on the localizable sensors
 # (`snl eval --crlb`, once per network; CRLB=0 skips it).
+# Before and after each size it prints the STREAM triad on the NP ranks
+# (bench/stream_triad.cpp, built with -DSNL_BUILD_BENCH=ON; skipped without
+# it): this VM's bandwidth moves by 2 x from hour to hour, and the rows of one
+# run compare as ratios.
 # Duration: about 2 minutes at 10^5 sensors, 15 minutes at 10^6 (the old
 # pipelines take minutes there), hours at 10^7 on 2 cores.
 set -euo pipefail
@@ -39,9 +43,15 @@ NP=${NP:-2}
 WORK=${WORK:-$(mktemp -d /tmp/snl_tts.XXXXXX)}
 METHODS=${METHODS:-"default pipeline papers mm ceres"}
 CRLB=${CRLB:-1}
+STREAM=${STREAM:-$(dirname "$SNL")/stream_triad}
 PY=/usr/bin/python3
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 mkdir -p "$WORK"
+
+stream() {  # the triad's GB/s on NP ranks (best of 10), or nothing without the binary
+  [ -x "$STREAM" ] || return 0
+  echo "# STREAM triad, $NP ranks, $1: $(mpirun -np "$NP" "$STREAM" 40000000 10 | sed -n 's/^triad_nt_gbs \([0-9.]*\).*/\1/p') GB/s"
+}
 
 method_args() {
   case $1 in
@@ -57,6 +67,7 @@ echo "# time_to_solution: $(date -u +%Y-%m-%dT%H:%MZ) $(git -C "$ROOT" rev-parse
 for n in $SIZES; do
   net=$WORK/net_$n.h5
   [ -f "$net" ] || "$SNL" generate -o "$net" --sensors "$n" > "$WORK/gen_$n.txt"
+  stream "before n = $n"
   crlb=nan
   ran=""
   for m in $METHODS; do
@@ -103,4 +114,5 @@ for m, d in rows.items():
           f"{d['write_seconds']:6.2f} {d['iterations']:7d} {ex:9.0f} {d['gradient_tests']:5d} {d['communications_per_sensor']:10.0f} "
           f"{d['ml_cost']:16.10g} {(d['ml_cost'] - best) / best:9.2e} {d['rmse']:9.6f} {d['rmse_localizable'] / crlb:9.3f}")
 EOF
+  stream "after n = $n"
 done

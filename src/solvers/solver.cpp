@@ -380,9 +380,10 @@ constexpr std::int64_t kLargeRecordEvery = 100;
 constexpr std::int64_t kLargeTestEvery = 50;
 
 // A gradient test's cost in iterations of the method (an exchange and a scalar
-// pass over the edges against the methods' SIMD kernels), measured on the
-// default 1M network on 2 ranks (docs/performance.md); 0: not modelled, the
-// interval stays fixed.
+// pass over the edges with exact sums against the methods' SIMD kernels),
+// measured on the default 1M network on 2 ranks (docs/performance.md); 0: not
+// modelled, the interval stays fixed. The bounded test (relative_gradient)
+// costs less, but these set the schedule, so they stay: the same stops.
 double gradient_test_cost(AlgorithmId id) {
   switch (id) {
     case AlgorithmId::kRelaxation: return 7;
