@@ -8,6 +8,23 @@ PY=/usr/bin/python3
 T=$(mktemp -d "${TMPDIR:-/tmp}/snl_cli.XXXXXX")
 trap 'rm -rf "$T"' EXIT
 fail() { echo "FAIL: $*" >&2; exit 1; }
+# run_failing NP LABEL ENVSPEC WANT MSG_REGEX ARGS...: `snl ARGS` on NP ranks
+# with ENVSPEC (VAR=value) in the environment ends, within 60 s (no hang),
+# with status WANT and an "snl: error: " line matching MSG_REGEX (stderr in
+# $T/err); NERR: how many such lines.
+run_failing() {
+  local np=$1 label=$2 envspec=$3 want=$4 msg=$5 rc
+  shift 5
+  set +e
+  env "$envspec" timeout 60 "$MPIEXEC" "$MPIEXEC_NUMPROC_FLAG" "$np" --oversubscribe "$SNL" "$@" > "$T/out" 2> "$T/err"
+  rc=$?
+  set -e
+  [ $rc -ne 124 ] || fail "$label np=$np: hang (killed by timeout)"
+  [ $rc -eq "$want" ] || { cat "$T/err"; fail "$label np=$np: status $rc, expected $want"; }
+  NERR=$(grep -c '^snl: error: ' "$T/err" || true)
+  [ "$NERR" -ge 1 ] || { cat "$T/err"; fail "$label np=$np: no error message"; }
+  grep '^snl: error: ' "$T/err" | grep -Eq "$msg" || { cat "$T/err"; fail "$label np=$np: message does not match '$msg'"; }
+}
 # Every MPI run of a test is watched. One that outlives SNL_TEST_RUN_LIMIT
 # seconds (default 240; the longest run of any test takes a few seconds) is a
 # hang: the stacks of mpirun and its ranks are printed (gdb, installed by

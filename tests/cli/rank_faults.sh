@@ -15,20 +15,13 @@ source "$(dirname "$0")/common.bash"
 sum0=$(md5sum < "$T/keep.h5")
 n=0
 check() {  # check NP SPEC EXPECTED_STATUS MESSAGE_REGEX
-  local np=$1 spec=$2 want=$3 msg=$4 rc nerr
-  set +e
-  SNL_TEST_FAIL=$spec timeout 60 "$MPIEXEC" "$MPIEXEC_NUMPROC_FLAG" "$np" --oversubscribe "$SNL" solve "$T/net.h5" \
-    -o "$T/keep.h5" --algorithm pipeline --max-iter 30 --tol 0 -q > "$T/out" 2> "$T/err"
-  rc=$?
-  set -e
-  [ $rc -ne 124 ] || fail "$spec np=$np: hang (killed by timeout)"
-  [ $rc -eq "$want" ] || { cat "$T/err"; fail "$spec np=$np: status $rc, expected $want"; }
-  nerr=$(grep -c '^snl: error: ' "$T/err" || true)
-  [ "$nerr" -eq 1 ] || { cat "$T/err"; fail "$spec np=$np: expected exactly one error message, got $nerr"; }
-  grep '^snl: error: ' "$T/err" | grep -Eq "$msg" || { cat "$T/err"; fail "$spec np=$np: message does not match '$msg'"; }
+  local np=$1 spec=$2 want=$3 msg=$4
+  run_failing "$np" "$spec" "SNL_TEST_FAIL=$spec" "$want" "$msg" solve "$T/net.h5" -o "$T/keep.h5" \
+    --algorithm pipeline --max-iter 30 --tol 0 -q
+  [ "$NERR" -eq 1 ] || { cat "$T/err"; fail "$spec np=$np: expected exactly one error message, got $NERR"; }
   [ "$(md5sum < "$T/keep.h5")" = "$sum0" ] || fail "$spec np=$np: existing output was modified"
   ! ls "$T" | grep -q '\.tmp-' || fail "$spec np=$np: temporary file left behind"
-  echo "ok: $spec np=$np status $rc: $(grep '^snl: error: ' "$T/err")"
+  echo "ok: $spec np=$np status $want: $(grep '^snl: error: ' "$T/err")"
   n=$((n + 1))
 }
 for np in 2 3; do
