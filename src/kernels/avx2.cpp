@@ -168,17 +168,28 @@ SNL_AVX2 void mm_chunks_avx2(const LocalizationProblem& prob, const NodeLanes& n
     const std::size_t i0 = std::size_t(v0) * P;
     __m256d V[P], A[P];
     load_own<P>(s.x + i0, V);
+    if (Extrap && s.xb) {  // x + beta (x - xb), as the blend pass
+      __m256d B[P];
+      load_own<P>(s.xb + i0, B);
+      for (int k = 0; k < P; ++k) V[k] = _mm256_add_pd(V[k], _mm256_mul_pd(vbeta, _mm256_sub_pd(V[k], B[k])));
+    }
     for (int k = 0; k < P; ++k) A[k] = _mm256_setzero_pd();
     for (std::int64_t g = nl.group_off[c]; g < nl.group_off[c + 1]; ++g) {
       if constexpr (Extrap) {
         prefetch_group<4, P>(nl, g, last, s.ya);
         prefetch_group<4, P>(nl, g, last, s.yb);
+        if (s.xb) prefetch_rows<4, P>(nl, g, last, s.xb);
       } else {
         prefetch_group<4, P>(nl, g, last, s.y);
       }
       prefetch_rows<4, P>(nl, g, last, s.x);
       __m256d U[P], dz[P], yn[P];
       load_rows<P>(s.x, nl.adj.data() + 4 * g, U);
+      if (Extrap && s.xb) {
+        __m256d B[P];
+        load_rows<P>(s.xb, nl.adj.data() + 4 * g, B);
+        for (int k = 0; k < P; ++k) U[k] = _mm256_add_pd(U[k], _mm256_mul_pd(vbeta, _mm256_sub_pd(U[k], B[k])));
+      }
       const __m256d r = _mm256_loadu_pd(nl.rho.data() + 4 * g);
       const __m256d re = lane_mask4(nl.real[g]), fw = lane_mask4(nl.fwd[g]);
       const __m256d sgn = _mm256_blendv_pd(minus_one, one, fw);
@@ -211,10 +222,14 @@ SNL_AVX2 void mm_chunks_avx2(const LocalizationProblem& prob, const NodeLanes& n
       }
     }
     if (nl.has_anchor[c]) {
-      alignas(32) double tmp[4 * P];
+      alignas(32) double tmp[4 * P], own[4 * P];
       store_own<P>(tmp, A, false);
-      for (int q = 0; q < 4; ++q)
-        add_anchor_mm_terms<P>(prob, v0 + q, s.x + i0 + P * q, s.keep, s.invL, s.aw, tmp + P * q);
+      const double* xo = s.x + i0;
+      if (Extrap && s.xb) {  // the extrapolated own rows
+        store_own<P>(own, V, false);
+        xo = own;
+      }
+      for (int q = 0; q < 4; ++q) add_anchor_mm_terms<P>(prob, v0 + q, xo + P * q, s.keep, s.invL, s.aw, tmp + P * q);
       load_own<P>(tmp, A);
     }
     __m256d X[P], D[P];

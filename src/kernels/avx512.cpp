@@ -183,17 +183,28 @@ SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& prob, const NodeLane
     const std::size_t i0 = std::size_t(v0) * P;
     __m512d V[P], A[P];
     load_own8<P>(s.x + i0, V);
+    if (Extrap && s.xb) {  // x + beta (x - xb), as the blend pass
+      __m512d B[P];
+      load_own8<P>(s.xb + i0, B);
+      for (int k = 0; k < P; ++k) V[k] = _mm512_add_pd(V[k], _mm512_mul_pd(vbeta, _mm512_sub_pd(V[k], B[k])));
+    }
     for (int k = 0; k < P; ++k) A[k] = _mm512_setzero_pd();
     for (std::int64_t g = nl.group_off[c]; g < nl.group_off[c + 1]; ++g) {
       if constexpr (Extrap) {
         prefetch_group<8, P>(nl, g, last, s.ya);
         prefetch_group<8, P>(nl, g, last, s.yb);
+        if (s.xb) prefetch_rows<8, P>(nl, g, last, s.xb);
       } else {
         prefetch_group<8, P>(nl, g, last, s.y);
       }
       prefetch_rows<8, P>(nl, g, last, s.x);
       __m512d U[P], dz[P], yn[P];
       load_rows8<P>(s.x, nl.adj.data() + 8 * g, U);
+      if (Extrap && s.xb) {
+        __m512d B[P];
+        load_rows8<P>(s.xb, nl.adj.data() + 8 * g, B);
+        for (int k = 0; k < P; ++k) U[k] = _mm512_add_pd(U[k], _mm512_mul_pd(vbeta, _mm512_sub_pd(U[k], B[k])));
+      }
       const __m512d r = _mm512_loadu_pd(nl.rho.data() + 8 * g);
       const __mmask8 re = nl.real[g], fw = nl.fwd[g], bw = static_cast<__mmask8>(~fw);
       double* yg = s.y + 8 * P * g;
@@ -223,10 +234,14 @@ SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& prob, const NodeLane
       }
     }
     if (nl.has_anchor[c]) {
-      alignas(64) double tmp[8 * P];
+      alignas(64) double tmp[8 * P], own[8 * P];
       store_own8<P>(tmp, A, false);
-      for (int q = 0; q < 8; ++q)
-        add_anchor_mm_terms<P>(prob, v0 + q, s.x + i0 + P * q, s.keep, s.invL, s.aw, tmp + P * q);
+      const double* xo = s.x + i0;
+      if (Extrap && s.xb) {  // the extrapolated own rows
+        store_own8<P>(own, V, false);
+        xo = own;
+      }
+      for (int q = 0; q < 8; ++q) add_anchor_mm_terms<P>(prob, v0 + q, xo + P * q, s.keep, s.invL, s.aw, tmp + P * q);
       load_own8<P>(tmp, A);
     }
     __m512d X[P], D[P];

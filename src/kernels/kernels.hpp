@@ -235,6 +235,10 @@ struct MMStep {
   const double* ya = nullptr;
   const double* yb = nullptr;
   double beta = 0;
+  /// With ya: where xb is set, every row the step reads (the node's own and
+  /// its neighbours') is x + beta (x - xb), formed on the fly the same way
+  /// (mm-accel's extrapolated point without a buffer or a pass of its own).
+  const double* xb = nullptr;
   /// Non-temporal stores of y where ya is set (the step writes a buffer it
   /// does not read: without them every line of y is read for ownership
   /// first, a third more traffic on y; stream_rows of y's bytes).

@@ -58,7 +58,15 @@ void mm_chunk_scalar(const LocalizationProblem& prob, const NodeLanes& nl, std::
   const std::int64_t* aoff = prob.anchor_offsets().data();
   for (int q = 0; q < nl.count[c]; ++q) {
     const LocalId v = nl.first[c] + q;
-    const double* xv = s.x + std::size_t(v) * P;
+    // The step's input rows: x, or mm-accel's extrapolation x + beta (x - xb).
+    auto row = [&](LocalId u, double* buf) -> const double* {
+      const double* r = s.x + std::size_t(u) * P;
+      if (!s.xb) return r;
+      for (int k = 0; k < P; ++k) buf[k] = r[k] + s.beta * (r[k] - s.xb[std::size_t(u) * P + k]);
+      return buf;
+    };
+    double xe[P], ue[P];
+    const double* xv = row(v, xe);
     const int L = NodeLanes::lane_of_node(q, C);
     double acc[P] = {}, t[P], y[P];
     for (std::int64_t g = g0; g < g1; ++g) {
@@ -69,7 +77,7 @@ void mm_chunk_scalar(const LocalizationProblem& prob, const NodeLanes& nl, std::
         for (int k = 0; k < P; ++k) y[k] = s.ya[yi + k * C] + s.beta * (s.ya[yi + k * C] - s.yb[yi + k * C]);
       else
         for (int k = 0; k < P; ++k) y[k] = yg[k * C];
-      mm_term<P>(xv, s.x + std::size_t(nl.adj[g * C + q]) * P, (nl.fwd[g] >> L) & 1, nl.rho[g * C + L], s.keep,
+      mm_term<P>(xv, row(nl.adj[g * C + q], ue), (nl.fwd[g] >> L) & 1, nl.rho[g * C + L], s.keep,
                  s.invL, y, t);
       for (int k = 0; k < P; ++k) {
         yg[k * C] = y[k];

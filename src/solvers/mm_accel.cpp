@@ -58,6 +58,21 @@ namespace {
 
 using detail::project_sphere;
 
+// One MM step from the point with rows v (ghost rows included) into xout, the
+// edge and anchor variables y and w updated in place; with ya set (cores that
+// extrapolate themselves), the step's input is (v + beta (v - xb), ya + beta
+// (ya - yb)) instead.
+struct StepArgs {
+  const double* v;
+  double* xout;
+  double* y;
+  double* w;
+  const double* ya = nullptr;
+  const double* yb = nullptr;
+  const double* xb = nullptr;
+  double beta = 0;
+};
+
 // Plain l2: MM's SIMD kernel on the lane layout (kernels.hpp); F and f summed
 // per node in slot order (detail::mm_cost_chunk), then exactly.
 class LaneCore {
@@ -80,20 +95,39 @@ class LaneCore {
   void init(const double* x, double* y, double* w) const {
     detail::with_dim(prob_.dim(), [&](auto P) { init_p<decltype(P)::value>(x, y, w); });
   }
-  // step() forms the extrapolated edge variables itself (every kernel table
-  // reads ya + beta (ya - yb) on the fly: one pass over y fewer).
-  bool extrapolates_y() const { return true; }
-  // One MM step from v (ghost rows included) into xout; w in place; y in
-  // place, or, with ya given, from ya + beta (ya - yb) into y.
-  void step(const double* v, double* xout, double* y, double* w, const double* ya = nullptr,
-            const double* yb = nullptr, double beta = 0) {
+  // The kernels form the extrapolated point themselves (every kernel table
+  // reads v + beta (v - xb) and ya + beta (ya - yb) on the fly: no buffer
+  // and no pass for it).
+  static constexpr bool kExtrapolates = true;
+  void step(const StepArgs& a) { detail::mm_chunks(prob_, *lanes_, 0, lanes_->size(), step_args(a)); }
+  // Chunks [c0, c1) of one pass: F and f of z = (x, y, w) into F (exactly or
+  // in plain block sums), and the extrapolating step from v with ya = y (the
+  // candidate's edge variables, read once for both) and yb into the step's
+  // buffers. Taken a few chunks at a time, so that the step reads the edge
+  // variables and rows the cost terms have just brought into cache: one
+  // stream over y instead of two. The step's arithmetic per chunk is the
+  // whole-range step's, so the iterates are the same bits.
+  void terms_and_step(const double* x, const double* y, const double* w, std::int64_t c0, std::int64_t c1,
+                      detail::ExactSum* F, bool exact, const StepArgs& a, bool /*boundary*/) {
+    const detail::MMStep st = step_args(a);
+    for (std::int64_t b = c0; b < c1; b += kCacheChunks) {
+      const std::int64_t e = std::min(c1, b + kCacheChunks);
+      if (exact)
+        add_terms(x, y, w, b, e, F);
+      else
+        add_terms_plain(x, y, w, b, e, F);
+      detail::mm_chunks(prob_, *lanes_, b, e, st);
+    }
+  }
+  detail::MMStep step_args(const StepArgs& a) {
     std::fill(norms_.begin(), norms_.end(), 0.0);
-    detail::MMStep st{v, xout, y, w, (L_ - 1.0) / L_, 1.0 / L_, norms_.data(), false};
-    st.ya = ya;
-    st.yb = yb;
-    st.beta = beta;
-    st.stream_y = ya != nullptr && detail::stream_rows(sizeof(double) * y_size());
-    detail::mm_chunks(prob_, *lanes_, 0, lanes_->size(), st);
+    detail::MMStep st{a.v, a.xout, a.y, a.w, (L_ - 1.0) / L_, 1.0 / L_, norms_.data(), false};
+    st.ya = a.ya;
+    st.yb = a.yb;
+    st.xb = a.ya ? a.xb : nullptr;
+    st.beta = a.beta;
+    st.stream_y = a.ya != nullptr && detail::stream_rows(sizeof(double) * y_size());
+    return st;
   }
   void add_terms(const double* x, const double* y, const double* w, std::int64_t c0, std::int64_t c1,
                  detail::ExactSum* F) const {
@@ -114,6 +148,9 @@ class LaneCore {
 
  private:
   static constexpr int kBlockAdds = 256;
+  // Chunks per block of terms_and_step: their edge variables (a few KiB a
+  // chunk) stay in the core's L2 between the two kernels.
+  static constexpr std::int64_t kCacheChunks = 64;
   template <int P>
   void init_p(const double* x, double* yv, double* wv) const {
     detail::best_edge_variables<P>(prob_, x, [&](LocalId v, std::int64_t e, int c) { return &yv[y_index(v, e, c)]; },
@@ -210,10 +247,15 @@ class ModelCore {
   std::int64_t split() const { return prob_.graph().num_interior(); }
   std::int64_t bytes() const { return k_.bytes(); }
   void init(const double* x, double* y, double* w) const { k_.init(x, y, w); }
-  bool extrapolates_y() const { return false; }
-  void step(const double* v, double* xout, double* y, double* w, const double* = nullptr, const double* = nullptr,
-            double = 0) {
-    k_.step(v, xout, y, w, nullptr, nullptr);
+  static constexpr bool kExtrapolates = false;  // MMAccel blends into buffers
+  void step(const StepArgs& a) { k_.step(a.v, a.xout, a.y, a.w, nullptr, nullptr); }
+  // The terms of chunks [c0, c1), and with the boundary part (the second
+  // call of a pass, its input rows complete only then) the step over every
+  // node: one node at a time, no cache blocking to gain.
+  void terms_and_step(const double* x, const double* y, const double* w, std::int64_t c0, std::int64_t c1,
+                      detail::ExactSum* F, bool, const StepArgs& a, bool boundary) {
+    add_terms(x, y, w, c0, c1, F);
+    if (boundary) step(a);
   }
   void add_terms(const double* x, const double* y, const double* w, std::int64_t c0, std::int64_t c1,
                  detail::ExactSum* F) const {
@@ -245,7 +287,8 @@ class MMAccel final : public Algorithm {
     // needs F exactly anyway. SNL_TEST_ACCEPT=plain|exact: tests choose.
     const char* choice = std::getenv("SNL_TEST_ACCEPT");
     plain_ = Core::kPlainSums && (choice ? std::strcmp(choice, "plain") == 0 : prob_.num_sensors() >= 10000);
-    for (auto& b : x_) b.assign(std::size_t(prob_.num_local()) * prob_.dim(), 0.0);
+    for (auto& b : x_) b.clear();
+    for (int b = 0; b < (Core::kExtrapolates ? kV : kV + 1); ++b) x_[b].assign(std::size_t(prob_.num_local()) * prob_.dim(), 0.0);
     std::copy(x0.begin(), x0.begin() + std::size_t(prob_.num_owned()) * prob_.dim(), x_[kCur].begin());
     prob_.graph().halo().exchange(x_[kCur].data(), prob_.dim());
     x_[kPrev] = x_[kCur];
@@ -255,29 +298,33 @@ class MMAccel final : public Algorithm {
     y_[kPrev] = y_[kCur];
     w_[kPrev] = w_[kCur];
     t_ = 0;
+    rejected_ = 0;
     cur_ = surrogate(kCur, true);
+    candidate();
   }
 
-  // Extrapolate, one MM step from there, exchange the new rows, accept or reject.
+  // The candidate z+ (made from z(k) by the last iteration, or by start(),
+  // load() or a restart) is accepted or rejected. One pass exchanges its
+  // rows, sums F(z+) and f(x+), and takes the next step from z+'s
+  // extrapolation as if z+ were accepted (the step the next iteration would
+  // take then), reading z+'s edge variables once for both; a rejection
+  // discards that step and makes a plain one from z(k).
   void iterate() override {
-    const double beta = t_ == 0 ? 0.0 : double(t_) / double(t_ + 3);
-    const bool fused = beta > 0 && core_.extrapolates_y();  // the kernel forms y's extrapolation
-    const double* v = extrapolate(beta, !fused);
-    if (fused)
-      core_.step(v, x_[kOut].data(), y_[kWork].data(), w_[kWork].data(), y_[kCur].data(), y_[kPrev].data(), beta);
-    else
-      core_.step(v, x_[kOut].data(), y_[kWork].data(), w_[kWork].data());
-    Costs c = surrogate(kOut, false);  // exchanges the new rows (the iteration's message)
-    if (beta > 0 && !accepts(c)) {  // F or f would rise: keep x(k), restart
+    const bool tested = t_ > 0;  // z+ came from an extrapolated point (a plain step is always accepted)
+    Costs c = pass(double(t_ + 1) / double(t_ + 4));  // beta_t of the next step, t = t_ + 1
+    if (tested && !accepts(c)) {  // F or f would rise: keep x(k), restart
+      ++rejected_;
       restart();
       return;
     }
+    // z(k+1) = z+, z(k) becomes the previous point, the pass's step the candidate.
     std::swap(x_[kPrev], x_[kCur]);
     std::swap(x_[kCur], x_[kOut]);
-    std::swap(y_[kPrev], y_[kCur]);
-    std::swap(y_[kCur], y_[kWork]);
-    std::swap(w_[kPrev], w_[kCur]);
-    std::swap(w_[kCur], w_[kWork]);
+    std::swap(x_[kOut], x_[kNext]);
+    for (auto* b : {&y_, &w_}) {  // the step wrote the spare (z(k-1)'s) buffer
+      std::swap((*b)[kPrev], (*b)[kCur]);
+      std::swap((*b)[kCur], (*b)[kOut]);
+    }
     cur_ = c;
     ++t_;
   }
@@ -301,10 +348,17 @@ class MMAccel final : public Algorithm {
     for (const auto& b : w_) n += b.capacity();
     return static_cast<std::int64_t>(sizeof(double) * n) + core_.bytes();
   }
-  // z(k), z(k-1) and the steps since the restart: the next iterate follows from them.
+  void report(std::vector<std::pair<std::string, double>>* values,
+              std::vector<std::pair<std::string, std::string>>*) const override {
+    values->emplace_back("rejected_steps", double(rejected_));
+  }
+  // z(k), z(k-1) and the steps since the restart: the candidate, and so every
+  // later iterate, follows from them. (After a rejection, t = 0 and z(k-1)'s
+  // edge and anchor variables are not read again.)
   void save(StateWriter& w) const override {
     const int p = prob_.dim();
     w.scalar("t", double(t_));
+    w.scalar("rejected_steps", double(rejected_));
     w.node_rows("x", x_[kCur].data(), p);
     w.node_rows("x_prev", x_[kPrev].data(), p);
     w.edge_rows("y", p, [&](LocalId v, std::int64_t e, int c) { return y_[kCur][y_index(v, e, c)]; });
@@ -315,6 +369,7 @@ class MMAccel final : public Algorithm {
   void load(const StateReader& r) override {
     const int p = prob_.dim();
     t_ = static_cast<std::int64_t>(r.scalar("t"));
+    rejected_ = static_cast<std::int64_t>(r.scalar("rejected_steps"));
     r.node_rows("x", x_[kCur].data(), p);
     r.node_rows("x_prev", x_[kPrev].data(), p);
     r.edge_rows("y", p, [&](LocalId v, std::int64_t e, int c, double y) { y_[kCur][y_index(v, e, c)] = y; });
@@ -323,6 +378,7 @@ class MMAccel final : public Algorithm {
     r.anchor_rows("w_prev", w_[kPrev].data(), p);
     prob_.graph().halo().exchange(x_[kPrev].data(), p);
     cur_ = surrogate(kCur, true);  // exchanges x's ghost rows; F and f are functions of z(k)
+    candidate();
   }
 
  private:
@@ -348,7 +404,7 @@ class MMAccel final : public Algorithm {
     const int dF = le(c.F, c.eF, cur_.F, cur_.eF), df = le(c.f, c.ef, cur_.f, cur_.ef);
     if (dF == 0 || df == 0) return false;
     if (dF == 1 && df == 1) return true;
-    c = exact_costs(kOut);  // x+'s ghost rows were exchanged by surrogate()
+    c = exact_costs(kOut);  // x+'s ghost rows were exchanged by pass()
     if (!cur_.exact) cur_ = exact_costs(kCur);
     return c.F <= cur_.F && c.f <= cur_.f;
   }
@@ -361,38 +417,83 @@ class MMAccel final : public Algorithm {
     t_ = 0;
     init_for_dim();
     cur_ = exact_costs(kCur);
+    candidate();
   }
 
   // Collective: F and f of z in buffers b exactly, x_[b]'s ghost rows as they are.
   Costs exact_costs(int b) {
     detail::ExactSum sums[2];
     core_.add_terms(x_[b].data(), y_[b].data(), w_[b].data(), 0, core_.chunks(), sums);
-    detail::allreduce_exact(sums, 2, prob_.comm());
-    Costs c;
-    c.F = sums[0].value();
-    c.f = sums[1].value();
-    return c;
+    return finish(sums, true);
   }
 
-  enum { kCur = 0, kPrev = 1, kOut = 2, kWork = 2, kV = 3 };  // x_: 4 buffers; y_, w_: 3
+  // x_: z(k), z(k-1), the candidate z+, the pass's step, and (cores that do
+  // not extrapolate x themselves) the extrapolated rows. y_, w_: z(k), z(k-1),
+  // z+; the pass's step writes z(k-1)'s, which an accepted z+ frees.
+  enum { kCur = 0, kPrev = 1, kOut = 2, kNext = 3, kV = 4 };
 
-  // The extrapolated point into the work buffers: w always and y where
-  // with_y (the kernel updates them in place; without, the kernel forms y's
-  // itself), x (ghost rows too, from the exchanged rows of z(k) and z(k-1):
-  // no extra message) only when beta > 0.
-  const double* extrapolate(double beta, bool with_y) {
-    auto blend = [beta](const std::vector<double>& a, const std::vector<double>& b, std::vector<double>& out) {
-      for (std::size_t i = 0; i < a.size(); ++i) out[i] = a[i] + beta * (a[i] - b[i]);
-    };
-    if (beta == 0) {
-      y_[kWork] = y_[kCur];
-      w_[kWork] = w_[kCur];
-      return x_[kCur].data();
+  // blend(a, b) = a + beta (a - b) over [i0, i1), the same arithmetic the
+  // kernels use where they extrapolate on the fly.
+  static void blend(const double* a, const double* b, double beta, double* out, std::size_t i0, std::size_t i1) {
+    for (std::size_t i = i0; i < i1; ++i) out[i] = a[i] + beta * (a[i] - b[i]);
+  }
+
+  // The candidate from z(k) alone (no collective): a plain MM step (t = 0),
+  // or the step from the extrapolation with beta_t = t / (t + 3) of z(k) and
+  // z(k-1) (load(): the candidate the interrupted run had made). Either way
+  // the same bits as pass()'s step.
+  void candidate() {
+    if (t_ == 0) {
+      y_[kOut] = y_[kCur];
+      w_[kOut] = w_[kCur];
+      core_.step({x_[kCur].data(), x_[kOut].data(), y_[kOut].data(), w_[kOut].data()});
+      return;
     }
-    if (with_y) blend(y_[kCur], y_[kPrev], y_[kWork]);
-    blend(w_[kCur], w_[kPrev], w_[kWork]);
-    blend(x_[kCur], x_[kPrev], x_[kV]);
-    return x_[kV].data();
+    const double beta = double(t_) / double(t_ + 3);
+    blend(w_[kCur].data(), w_[kPrev].data(), beta, w_[kOut].data(), 0, w_[kOut].size());
+    core_.step(extrapolated(kCur, kPrev, kOut, beta, 0, x_[kCur].size()));
+  }
+
+  // The step from z_a + beta (z_a - z_b) into x_[out] and the (y, w) buffers
+  // `out` (w there already blended): the kernel extrapolates x's rows [r0, r1)
+  // and y itself, or they are blended here into x_[kV] and y_[out] first.
+  StepArgs extrapolated(int a, int b, int out, double beta, std::size_t r0, std::size_t r1) {
+    const int xo = out == kOut ? kOut : kNext;
+    StepArgs st{x_[a].data(), x_[xo].data(), y_[out].data(), w_[out].data()};
+    if (Core::kExtrapolates) {
+      st.ya = y_[a].data();
+      st.yb = y_[b].data();
+      st.xb = x_[b].data();
+      st.beta = beta;
+      return st;
+    }
+    blend(x_[a].data(), x_[b].data(), beta, x_[kV].data(), r0, r1);
+    if (r0 == 0) blend(y_[a].data(), y_[b].data(), beta, y_[out].data(), 0, y_[out].size());
+    st.v = x_[kV].data();
+    return st;
+  }
+
+  // Collective, the iteration's message: exchange x+'s ghost rows; F(z+) and
+  // f(x+) (plain sums with bounds where plain_); the step from the point
+  // z+ + beta (z+ - z(k)) into x_[kNext] and z(k-1)'s (y, w). The interior
+  // chunks (no ghost row read, by the cost terms or the step) overlap the
+  // exchange.
+  Costs pass(double beta) {
+    const bool exact = !plain_;
+    const int p = prob_.dim();
+    const std::size_t no = std::size_t(prob_.num_owned()) * p, nl = x_[kOut].size();
+    HaloPlan& halo = prob_.graph().halo();
+    blend(w_[kOut].data(), w_[kCur].data(), beta, w_[kPrev].data(), 0, w_[kPrev].size());
+    halo.begin(x_[kOut].data(), p);
+    StepArgs st = extrapolated(kOut, kCur, kPrev, beta, 0, no);
+    detail::ExactSum sums[2];
+    core_.terms_and_step(x_[kOut].data(), y_[kOut].data(), w_[kOut].data(), 0, core_.split(), sums, exact, st,
+                         false);
+    halo.end(x_[kOut].data(), p);
+    st = extrapolated(kOut, kCur, kPrev, beta, no, nl);
+    core_.terms_and_step(x_[kOut].data(), y_[kOut].data(), w_[kOut].data(), core_.split(), core_.chunks(), sums,
+                         exact, st, true);
+    return finish(sums, exact);
   }
 
   std::size_t y_index(LocalId v, std::int64_t e, int c) const { return core_.y_index(v, e, c); }
@@ -402,10 +503,7 @@ class MMAccel final : public Algorithm {
 
   // Collective: F at (x_[b], y_[b], w_[b]) (000, eq. 2) and f at x_[b] (the
   // ML cost, the same terms as evaluate_costs), after exchanging x_[b]'s
-  // ghost rows; the interior chunks' terms overlap the exchange. exact: the
-  // exact sums (the same F and f for any partition); otherwise plain block
-  // sums with their bounds, 2 (m + 2) u of the sum (every term is >= 0) and
-  // 2^-1000 for subnormal terms.
+  // ghost rows; the interior chunks' terms overlap the exchange.
   Costs surrogate(int b, bool exact) {
     exact = exact || !plain_;
     HaloPlan& halo = prob_.graph().halo();
@@ -414,6 +512,18 @@ class MMAccel final : public Algorithm {
     add_surrogate_terms(b, 0, core_.split(), sums, exact);
     halo.end(x_[b].data(), prob_.dim());
     add_surrogate_terms(b, core_.split(), core_.chunks(), sums, exact);
+    return finish(sums, exact);
+  }
+  void add_surrogate_terms(int b, std::int64_t c0, std::int64_t c1, detail::ExactSum* F, bool exact) const {
+    if (exact)
+      core_.add_terms(x_[b].data(), y_[b].data(), w_[b].data(), c0, c1, F);
+    else
+      core_.add_terms_plain(x_[b].data(), y_[b].data(), w_[b].data(), c0, c1, F);
+  }
+  // Collective: the ranks' sums combined exactly. Plain sums carry their
+  // bounds, 2 (m + 2) u of the sum (every term is >= 0) and 2^-1000 for
+  // subnormal terms.
+  Costs finish(detail::ExactSum* sums, bool exact) {
     detail::allreduce_exact(sums, 2, prob_.comm());
     Costs c;
     c.F = sums[0].value();
@@ -426,18 +536,13 @@ class MMAccel final : public Algorithm {
     }
     return c;
   }
-  void add_surrogate_terms(int b, std::int64_t c0, std::int64_t c1, detail::ExactSum* F, bool exact) const {
-    if (exact)
-      core_.add_terms(x_[b].data(), y_[b].data(), w_[b].data(), c0, c1, F);
-    else
-      core_.add_terms_plain(x_[b].data(), y_[b].data(), w_[b].data(), c0, c1, F);
-  }
 
   LocalizationProblem& prob_;
   Core core_;
-  std::array<std::vector<double>, 4> x_;  // z(k), z(k-1), the step's output, the extrapolated rows
-  std::array<std::vector<double>, 3> y_, w_;  // z(k), z(k-1), the step's (in place); y_ in lane layout
+  std::array<std::vector<double>, 5> x_;      // see the enum above
+  std::array<std::vector<double>, 3> y_, w_;  // z(k), z(k-1), z+; y_ in lane layout
   std::int64_t t_ = 0;         // steps accepted since the last restart
+  std::int64_t rejected_ = 0;  // candidates rejected (each one a restart)
   Costs cur_;                  // F(z(k)), f(x(k))
   bool plain_ = false;         // acceptance tests on plain sums first (start())
 };

@@ -291,15 +291,18 @@ TEST_P(KernelsByDim, SimdMMStepEqualsScalarBitForBit) {
   for (int c = 1; c < dim; ++c) EXPECT_EQ(ya[nl.at(10, 0, dim, c)], 0.0);
 }
 
-// mm-accel's extrapolating step (MMStep::ya): forming ya + beta (ya - yb) in
-// the kernel gives the bits of a separate blend pass followed by the in-place
-// step, on the scalar and the SIMD path (AVX2 or AVX-512, the layout's), with
-// y's regular and non-temporal stores (MMStep::stream_y), every real slot,
-// x(t+1), the anchor variables and the norms; ya and yb are not written.
+// mm-accel's extrapolating step (MMStep::ya, MMStep::xb): forming ya + beta
+// (ya - yb) and, with xb, the rows x + beta (x - xb) in the kernel gives the
+// bits of separate blend passes followed by the in-place step, on the scalar
+// and the SIMD path (AVX2 or AVX-512, the layout's), with y's regular and
+// non-temporal stores (MMStep::stream_y), every real slot, x(t+1), the anchor
+// variables and the norms; ya, yb, x and xb are not written.
 TEST_P(KernelsByDim, ExtrapolatingMMStepEqualsBlendThenStep) {
   std::mt19937_64 gen(13);
   std::uniform_real_distribution<double> u(-1, 1);
   const auto x = awkward_rows(prob, 6);
+  std::vector<double> xprev(x.size());
+  for (auto& v : xprev) v = u(gen);
   std::vector<double> ycur(std::size_t(nl.groups()) * nl.lanes * dim), yprev(ycur.size()),
       aw0(prob.anchor_ranges().size() * dim);
   for (auto& v : ycur) v = u(gen);
@@ -307,10 +310,13 @@ TEST_P(KernelsByDim, ExtrapolatingMMStepEqualsBlendThenStep) {
   for (auto& v : aw0) v = u(gen);
   const double beta = 0.7;
   const auto& off = prob.graph().offsets();
-  for (int path = 0; path < 3; ++path) {
-    const bool simd = path > 0, stream = path == 2;
+  for (int path = 0; path < 6; ++path) {
+    const bool simd = path % 3 > 0, stream = path % 3 == 2, with_x = path >= 3;
     if (simd && !have_simd()) continue;
     const bool had = detail::set_simd_enabled(simd);
+    std::vector<double> xblend = x;
+    if (with_x)
+      for (std::size_t i = 0; i < x.size(); ++i) xblend[i] = x[i] + beta * (x[i] - xprev[i]);
     auto step = [&](bool fused, std::vector<double>* y, std::vector<double>* aw, std::vector<double>* xn,
                     std::vector<double>* norms) {
       y->assign(ycur.size(), -3.0);
@@ -319,17 +325,19 @@ TEST_P(KernelsByDim, ExtrapolatingMMStepEqualsBlendThenStep) {
       *aw = aw0;
       xn->assign(x.size(), -7.0);
       norms->assign(16, 0.0);
-      detail::MMStep st{x.data(), xn->data(), y->data(), aw->data(), 0.9, 0.1, norms->data(), false};
+      detail::MMStep st{fused ? x.data() : xblend.data(), xn->data(), y->data(), aw->data(), 0.9, 0.1,
+                        norms->data(), false};
       if (fused) {
         st.ya = ycur.data();
         st.yb = yprev.data();
+        st.xb = with_x ? xprev.data() : nullptr;
         st.beta = beta;
         st.stream_y = stream;
       }
       detail::mm_chunks(prob, nl, 0, nl.split, st);
       detail::mm_chunks(prob, nl, nl.split, nl.size(), st);
     };
-    const std::vector<double> ycur0 = ycur, yprev0 = yprev;
+    const std::vector<double> ycur0 = ycur, yprev0 = yprev, x0 = x, xprev0 = xprev;
     std::vector<double> yf, awf, xf, nf, yb, awb, xb, nb;
     step(true, &yf, &awf, &xf, &nf);
     step(false, &yb, &awb, &xb, &nb);
@@ -338,6 +346,7 @@ TEST_P(KernelsByDim, ExtrapolatingMMStepEqualsBlendThenStep) {
     EXPECT_TRUE(same_bits(awf, awb)) << "path " << path;
     EXPECT_TRUE(same_bits(nf, nb)) << "path " << path;
     EXPECT_TRUE(same_bits(ycur, ycur0) && same_bits(yprev, yprev0)) << "path " << path;
+    EXPECT_TRUE(same_bits(x, x0) && same_bits(xprev, xprev0)) << "path " << path;
     int differs = 0;
     for (LocalId v = 0; v < prob.num_owned(); ++v)
       for (auto e = off[v]; e < off[v + 1]; ++e)

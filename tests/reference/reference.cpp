@@ -113,28 +113,41 @@ std::vector<double> nesterov(const Network& net, const std::vector<double>& x0, 
   return x;
 }
 
-std::vector<double> mm(const Network& net, const std::vector<double>& x0, int iters, std::vector<double>* surrogate) {
-  const int p = net.dim;
-  const auto d = degrees(net);
-  const double L = 2.0 * (d.empty() ? 0 : *std::max_element(d.begin(), d.end())) + max_anchor_degree(net) + 2.0;
-  const std::size_t E = net.sensor_ranges.size(), Ea = net.anchor_ranges.size();
-  // Orientation i -> j with i < j.
-  std::vector<GlobalId> ei(E), ej(E);
-  for (std::size_t e = 0; e < E; ++e) {
-    ei[e] = std::min(net.sensor_edges[2 * e], net.sensor_edges[2 * e + 1]);
-    ej[e] = std::max(net.sensor_edges[2 * e], net.sensor_edges[2 * e + 1]);
+namespace {
+// 000's MM (Algorithm 1) on z = (x, y, w), y per sensor edge oriented i -> j
+// with i < j, w per anchor edge: the surrogate F (eq. 2), the variables at
+// their best for x (where F = f), and one projected gradient step with step
+// 1/L (eqs. 11-13).
+struct PlainMM {
+  const Network& net;
+  int p;
+  double L;
+  std::size_t E, Ea;
+  std::vector<GlobalId> ei, ej;
+  explicit PlainMM(const Network& n) : net(n), p(n.dim), E(n.sensor_ranges.size()), Ea(n.anchor_ranges.size()) {
+    const auto d = degrees(net);
+    L = 2.0 * (d.empty() ? 0 : *std::max_element(d.begin(), d.end())) + max_anchor_degree(net) + 2.0;
+    ei.resize(E);
+    ej.resize(E);
+    for (std::size_t e = 0; e < E; ++e) {
+      ei[e] = std::min(net.sensor_edges[2 * e], net.sensor_edges[2 * e + 1]);
+      ej[e] = std::max(net.sensor_edges[2 * e], net.sensor_edges[2 * e + 1]);
+    }
   }
-  std::vector<double> x = x0, y(E * p), w(Ea * p);
-  for (std::size_t e = 0; e < E; ++e) {
-    for (int c = 0; c < p; ++c) y[e * p + c] = x[ei[e] * p + c] - x[ej[e] * p + c];
-    sphere(net.sensor_ranges[e], &y[e * p], p);
+  const double* anchor(std::size_t e) const { return &net.anchors[net.anchor_edges[2 * e + 1] * p]; }
+  void best(const std::vector<double>& x, std::vector<double>* y, std::vector<double>* w) const {
+    y->assign(E * p, 0.0);
+    w->assign(Ea * p, 0.0);
+    for (std::size_t e = 0; e < E; ++e) {
+      for (int c = 0; c < p; ++c) (*y)[e * p + c] = x[ei[e] * p + c] - x[ej[e] * p + c];
+      sphere(net.sensor_ranges[e], &(*y)[e * p], p);
+    }
+    for (std::size_t e = 0; e < Ea; ++e) {
+      for (int c = 0; c < p; ++c) (*w)[e * p + c] = x[net.anchor_edges[2 * e] * p + c] - anchor(e)[c];
+      sphere(net.anchor_ranges[e], &(*w)[e * p], p);
+    }
   }
-  for (std::size_t e = 0; e < Ea; ++e) {
-    const double* a = &net.anchors[net.anchor_edges[2 * e + 1] * p];
-    for (int c = 0; c < p; ++c) w[e * p + c] = x[net.anchor_edges[2 * e] * p + c] - a[c];
-    sphere(net.anchor_ranges[e], &w[e * p], p);
-  }
-  auto F = [&]() {
+  double F(const std::vector<double>& x, const std::vector<double>& y, const std::vector<double>& w) const {
     double s = 0;
     for (std::size_t e = 0; e < E; ++e)
       for (int c = 0; c < p; ++c) {
@@ -143,14 +156,13 @@ std::vector<double> mm(const Network& net, const std::vector<double>& x0, int it
       }
     for (std::size_t e = 0; e < Ea; ++e)
       for (int c = 0; c < p; ++c) {
-        const double r = x[net.anchor_edges[2 * e] * p + c] - net.anchors[net.anchor_edges[2 * e + 1] * p + c] - w[e * p + c];
+        const double r = x[net.anchor_edges[2 * e] * p + c] - anchor(e)[c] - w[e * p + c];
         s += 0.5 * r * r;
       }
     return s;
-  };
-  if (surrogate) surrogate->assign(1, F());
-  for (int t = 0; t < iters; ++t) {
-    // Gradient of F with respect to x at z(t), then the projected steps (000, eqs. 11-13).
+  }
+  // Gradient of F with respect to x at z, then the projected steps, in place.
+  void step(std::vector<double>& x, std::vector<double>& y, std::vector<double>& w) const {
     std::vector<double> gx(x.size(), 0.0), yn = y, wn = w;
     for (std::size_t e = 0; e < E; ++e)
       for (int c = 0; c < p; ++c) {
@@ -163,9 +175,8 @@ std::vector<double> mm(const Network& net, const std::vector<double>& x0, int it
     for (std::size_t e = 0; e < E; ++e) sphere(net.sensor_ranges[e], &yn[e * p], p);
     for (std::size_t e = 0; e < Ea; ++e) {
       const GlobalId i = net.anchor_edges[2 * e];
-      const double* a = &net.anchors[net.anchor_edges[2 * e + 1] * p];
       for (int c = 0; c < p; ++c) {
-        const double dz = x[i * p + c] - a[c];
+        const double dz = x[i * p + c] - anchor(e)[c];
         gx[i * p + c] += dz - w[e * p + c];
         wn[e * p + c] = (L - 1) / L * w[e * p + c] + 1 / L * dz;
       }
@@ -174,7 +185,59 @@ std::vector<double> mm(const Network& net, const std::vector<double>& x0, int it
     for (std::size_t t2 = 0; t2 < x.size(); ++t2) x[t2] -= gx[t2] / L;
     y.swap(yn);
     w.swap(wn);
-    if (surrogate) surrogate->push_back(F());
+  }
+};
+}  // namespace
+
+std::vector<double> mm(const Network& net, const std::vector<double>& x0, int iters, std::vector<double>* surrogate) {
+  const PlainMM mm(net);
+  std::vector<double> x = x0, y, w;
+  mm.best(x, &y, &w);
+  if (surrogate) surrogate->assign(1, mm.F(x, y, w));
+  for (int t = 0; t < iters; ++t) {
+    mm.step(x, y, w);
+    if (surrogate) surrogate->push_back(mm.F(x, y, w));
+  }
+  return x;
+}
+
+std::vector<double> mm_accel(const Network& net, const std::vector<double>& x0, int iters, std::vector<double>* ml,
+                             int* restarts) {
+  const PlainMM mm(net);
+  std::vector<double> x = x0, y, w;
+  mm.best(x, &y, &w);
+  std::vector<double> xp = x, yp = y, wp = w;
+  double F = mm.F(x, y, w), f = ml_cost(net, x);
+  if (ml) ml->assign(1, f);
+  if (restarts) *restarts = 0;
+  long t = 0;
+  auto blend = [](const std::vector<double>& a, const std::vector<double>& b, double beta) {
+    std::vector<double> v = a;
+    for (std::size_t q = 0; q < v.size(); ++q) v[q] = a[q] + beta * (a[q] - b[q]);
+    return v;
+  };
+  for (int it = 0; it < iters; ++it) {
+    const double beta = t == 0 ? 0.0 : double(t) / double(t + 3);
+    std::vector<double> v = blend(x, xp, beta), yv = blend(y, yp, beta), wv = blend(w, wp, beta);
+    mm.step(v, yv, wv);
+    const double Fn = mm.F(v, yv, wv), fn = ml_cost(net, v);
+    if (beta > 0 && !(Fn <= F && fn <= f)) {  // reject: restart from x with its best (y, w)
+      t = 0;
+      mm.best(x, &y, &w);
+      F = mm.F(x, y, w);
+      if (restarts) ++*restarts;
+    } else {
+      xp.swap(x);
+      x.swap(v);
+      yp.swap(y);
+      y.swap(yv);
+      wp.swap(w);
+      w.swap(wv);
+      F = Fn;
+      f = fn;
+      ++t;
+    }
+    if (ml) ml->push_back(f);
   }
   return x;
 }

@@ -21,6 +21,12 @@ std::vector<double> nesterov(const Network& net, const std::vector<double>& x0, 
 /// iteration (index 0: at the start) go to *surrogate if non-null.
 std::vector<double> mm(const Network& net, const std::vector<double>& x0, int iters,
                        std::vector<double>* surrogate = nullptr);
+/// mm-accel (unweighted l2): the MM step above from the extrapolated point
+/// z(k) + t/(t+3) (z(k) - z(k-1)), accepted when neither F nor the ML cost
+/// rises, else a restart (t = 0, (y, w) at their best for x(k)). The ML cost
+/// after each iteration into *ml, the rejected steps into *restarts.
+std::vector<double> mm_accel(const Network& net, const std::vector<double>& x0, int iters,
+                             std::vector<double>* ml = nullptr, int* restarts = nullptr);
 
 /// Jones-Plassmann colouring with the distributed one's priorities.
 std::vector<int> coloring(const Network& net);
