@@ -11,7 +11,10 @@
 #   A=old/bin/snl B=build/bin/snl NETS="n1m.h5 n10m.h5" NPS="1 2" REPS=2 \
 #     WORK=/tmp/snl-ab bench/setup_ab.sh
 # NPS_BIG / BIG_FROM: rank counts for networks of at least BIG_FROM sensors
-# (default: NPS). One JSON line per run in $WORK/records.jsonl; one text line
+# (default: NPS). ARGS replaces the solve options after the network (default
+# "--max-iter ITERS --tol 0 --algorithm pipeline --refine REFINE"; e.g. ARGS=""
+# runs snl solve's defaults end to end: wall and per-phase seconds compare
+# then). One JSON line per run in $WORK/records.jsonl; one text line
 # per run on stdout. More builds or settings: LABELS="A B C" with C=... and,
 # for any label, L_ENV="VAR=value ..." set for its runs only (e.g.
 # C=build/bin/snl C_ENV=SNL_MALLOC=system: the same binary on the system
@@ -20,6 +23,7 @@
 set -euo pipefail
 : "${A:?A: the first snl binary}" "${B:?B: the second snl binary}" "${NETS:?NETS: network files}"
 NPS=${NPS:-"1 2"}
+ARGS=${ARGS-"--max-iter ${ITERS:-1} --tol 0 --algorithm pipeline --refine ${REFINE:-mm}"}
 NPS_BIG=${NPS_BIG:-$NPS}
 BIG_FROM=${BIG_FROM:-5000000}
 REPS=${REPS:-2}
@@ -49,9 +53,9 @@ for net in $NETS; do
         ev=${which}_ENV
         pv=${which}_PART
         out="$WORK/r_${n}_${np}_${which}${rep}"
-        # shellcheck disable=SC2086  # L_ENV is a list of VAR=value words
+        # shellcheck disable=SC2086  # L_ENV and ARGS are lists of words
         /usr/bin/time -f "%e" -o "$out.time" env ${!ev:-} mpirun -np "$np" --oversubscribe "$bin" solve "$net" -o "$out.h5" \
-          --partition "${!pv:-${PARTITION:-metis}}" --max-iter "${ITERS:-1}" --tol 0 --algorithm pipeline --refine "${REFINE:-mm}" -q --json "$out.json"
+          --partition "${!pv:-${PARTITION:-metis}}" $ARGS -q --json "$out.json"
         [ -n "$ref" ] || ref="$out.h5"
         $PY - "$out" "$ref" "$n" "$np" "$which" "$rep" "$(cat "$out.time")" "$(cut -d' ' -f1 /proc/loadavg)" "$rec" <<'PYEOF'
 import json, sys, h5py
@@ -61,7 +65,9 @@ same = h5py.File(out + ".h5", "r")["positions"][()].tobytes() == h5py.File(ref, 
 r = {"n": int(n), "ranks": int(np_), "build": which, "rep": int(rep), "wall": float(wall), "load1": float(load),
      "positions_equal_first_A": same, "allocator": j.get("allocator", "system")}
 r.update({k: v for k, v in j.items() if k.startswith("setup_") or k in ("peak_rss_bytes_per_rank", "partition", "edge_cut", "ghosts",
-                                                                    "read_seconds", "solve_seconds", "write_seconds")})
+                                                                    "read_seconds", "solve_seconds", "write_seconds",
+                                                                    "start_seconds", "iterations", "ml_cost")})
+r.update({k: v for k, v in j.items() if k.endswith("_iterate_seconds")})
 its = max(1, j["iterations"] // 2)  # the pipeline's two phases, ITERS each
 r.update({p + "_ms_per_iteration": 1e3 * j.get(p + "_iterate_seconds", 0) / its for p in ("relaxation", "mm", "mm-accel")})
 with open(rec, "a") as f:
@@ -73,7 +79,9 @@ print(f"n={n} np={np_} {which}{rep} ({r['allocator']}, {r.get('partition')}, cut
       f"{r['relaxation_ms_per_iteration']:.2f} MM {r['mm_ms_per_iteration']:.2f} mm-accel {r['mm-accel_ms_per_iteration']:.2f}, "
       f"graph {r['setup_graph_seconds']:.2f} (exchange {g('exchange'):.2f}, lists {g('lists'):.2f}, "
       f"order {g('order'):.2f}, csr {g('csr'):.2f}), build bytes/rank {max(r['setup_graph_build_bytes_per_rank'])}, "
-      f"peak RSS/rank {max(r['peak_rss_bytes_per_rank'])}, same positions {same}")
+      f"peak RSS/rank {max(r['peak_rss_bytes_per_rank'])}, same positions {same}; start {r.get('start_seconds', 0):.2f} s, "
+      f"iterations {r['iterations']}, ML cost {r['ml_cost']:.10g}, seconds iterating: "
+      + ", ".join(f"{k[:-len('_iterate_seconds')]} {v:.2f}" for k, v in r.items() if k.endswith("_iterate_seconds")))
 PYEOF
       done
     done

@@ -114,10 +114,10 @@ std::vector<double> nesterov(const Network& net, const std::vector<double>& x0, 
 }
 
 namespace {
-// 000's MM (Algorithm 1) on z = (x, y, w), y per sensor edge oriented i -> j
-// with i < j, w per anchor edge: the surrogate F (eq. 2), the variables at
-// their best for x (where F = f), and one projected gradient step with step
-// 1/L (eqs. 11-13).
+// 000's MM (Algorithm 1) on z = (x, y): y holds p reals per sensor edge,
+// oriented i -> j with i < j, then p per anchor edge. The surrogate F (eq. 2),
+// y at its best for x (where F = f), and one projected gradient step with
+// step 1/L (eqs. 11-13), in place.
 struct PlainMM {
   const Network& net;
   int p;
@@ -134,105 +134,81 @@ struct PlainMM {
       ej[e] = std::max(net.sensor_edges[2 * e], net.sensor_edges[2 * e + 1]);
     }
   }
-  const double* anchor(std::size_t e) const { return &net.anchors[net.anchor_edges[2 * e + 1] * p]; }
-  void best(const std::vector<double>& x, std::vector<double>* y, std::vector<double>* w) const {
-    y->assign(E * p, 0.0);
-    w->assign(Ea * p, 0.0);
-    for (std::size_t e = 0; e < E; ++e) {
-      for (int c = 0; c < p; ++c) (*y)[e * p + c] = x[ei[e] * p + c] - x[ej[e] * p + c];
-      sphere(net.sensor_ranges[e], &(*y)[e * p], p);
-    }
-    for (std::size_t e = 0; e < Ea; ++e) {
-      for (int c = 0; c < p; ++c) (*w)[e * p + c] = x[net.anchor_edges[2 * e] * p + c] - anchor(e)[c];
-      sphere(net.anchor_ranges[e], &(*w)[e * p], p);
-    }
+  // Edge e's difference x_i - x_j (e < E) or x_i - a_k (anchor edge e - E), coordinate c.
+  double dz(const std::vector<double>& x, std::size_t e, int c) const {
+    if (e < E) return x[ei[e] * p + c] - x[ej[e] * p + c];
+    const std::size_t k = e - E;
+    return x[net.anchor_edges[2 * k] * p + c] - net.anchors[net.anchor_edges[2 * k + 1] * p + c];
   }
-  double F(const std::vector<double>& x, const std::vector<double>& y, const std::vector<double>& w) const {
+  double range(std::size_t e) const { return e < E ? net.sensor_ranges[e] : net.anchor_ranges[e - E]; }
+  std::vector<double> best_y(const std::vector<double>& x) const {
+    std::vector<double> y((E + Ea) * p);
+    for (std::size_t e = 0; e < E + Ea; ++e) {
+      for (int c = 0; c < p; ++c) y[e * p + c] = dz(x, e, c);
+      sphere(range(e), &y[e * p], p);
+    }
+    return y;
+  }
+  double Phi(const std::vector<double>& x, const std::vector<double>& y) const {
     double s = 0;
-    for (std::size_t e = 0; e < E; ++e)
+    for (std::size_t e = 0; e < E + Ea; ++e)
       for (int c = 0; c < p; ++c) {
-        const double r = x[ei[e] * p + c] - x[ej[e] * p + c] - y[e * p + c];
-        s += 0.5 * r * r;
-      }
-    for (std::size_t e = 0; e < Ea; ++e)
-      for (int c = 0; c < p; ++c) {
-        const double r = x[net.anchor_edges[2 * e] * p + c] - anchor(e)[c] - w[e * p + c];
+        const double r = dz(x, e, c) - y[e * p + c];
         s += 0.5 * r * r;
       }
     return s;
   }
-  // Gradient of F with respect to x at z, then the projected steps, in place.
-  void step(std::vector<double>& x, std::vector<double>& y, std::vector<double>& w) const {
-    std::vector<double> gx(x.size(), 0.0), yn = y, wn = w;
-    for (std::size_t e = 0; e < E; ++e)
+  // Gradient of F with respect to x at z, then the projected steps.
+  void step(std::vector<double>& x, std::vector<double>& y) const {
+    std::vector<double> gx(x.size(), 0.0), yn = y;
+    for (std::size_t e = 0; e < E + Ea; ++e) {
       for (int c = 0; c < p; ++c) {
-        const double dz = x[ei[e] * p + c] - x[ej[e] * p + c];
-        const double r = dz - y[e * p + c];
-        gx[ei[e] * p + c] += r;
-        gx[ej[e] * p + c] -= r;
-        yn[e * p + c] = (L - 1) / L * y[e * p + c] + 1 / L * dz;
+        const double d = dz(x, e, c), r = d - y[e * p + c];
+        if (e < E) {
+          gx[ei[e] * p + c] += r;
+          gx[ej[e] * p + c] -= r;
+        } else {
+          gx[net.anchor_edges[2 * (e - E)] * p + c] += r;
+        }
+        yn[e * p + c] = (L - 1) / L * y[e * p + c] + 1 / L * d;
       }
-    for (std::size_t e = 0; e < E; ++e) sphere(net.sensor_ranges[e], &yn[e * p], p);
-    for (std::size_t e = 0; e < Ea; ++e) {
-      const GlobalId i = net.anchor_edges[2 * e];
-      for (int c = 0; c < p; ++c) {
-        const double dz = x[i * p + c] - anchor(e)[c];
-        gx[i * p + c] += dz - w[e * p + c];
-        wn[e * p + c] = (L - 1) / L * w[e * p + c] + 1 / L * dz;
-      }
-      sphere(net.anchor_ranges[e], &wn[e * p], p);
+      sphere(range(e), &yn[e * p], p);
     }
-    for (std::size_t t2 = 0; t2 < x.size(); ++t2) x[t2] -= gx[t2] / L;
+    for (std::size_t t = 0; t < x.size(); ++t) x[t] -= gx[t] / L;
     y.swap(yn);
-    w.swap(wn);
   }
 };
-}  // namespace
 
-std::vector<double> mm(const Network& net, const std::vector<double>& x0, int iters, std::vector<double>* surrogate) {
-  const PlainMM mm(net);
-  std::vector<double> x = x0, y, w;
-  mm.best(x, &y, &w);
-  if (surrogate) surrogate->assign(1, mm.F(x, y, w));
-  for (int t = 0; t < iters; ++t) {
-    mm.step(x, y, w);
-    if (surrogate) surrogate->push_back(mm.F(x, y, w));
-  }
-  return x;
-}
-
-std::vector<double> mm_accel(const Network& net, const std::vector<double>& x0, int iters, std::vector<double>* ml,
-                             int* restarts) {
-  const PlainMM mm(net);
-  std::vector<double> x = x0, y, w;
-  mm.best(x, &y, &w);
-  std::vector<double> xp = x, yp = y, wp = w;
-  double F = mm.F(x, y, w), f = ml_cost(net, x);
+// mm-accel's loop over either model's MM (plain l2 or ModelMMRef): the MM
+// step from the extrapolated point z(k) + t/(t+3) (z(k) - z(k-1)), accepted
+// when neither Phi nor the ML cost `cost` rises, else a restart (t = 0, y at
+// its best for x(k)). The ML cost after each iteration into *ml, the rejected
+// steps into *restarts.
+template <class MM, class Cost>
+std::vector<double> accelerated_mm(const MM& r, Cost cost, const std::vector<double>& x0, int iters,
+                                   std::vector<double>* ml, int* restarts) {
+  std::vector<double> x = x0, y = r.best_y(x0), xp = x, yp = y;
+  double F = r.Phi(x, y), f = cost(x);
   if (ml) ml->assign(1, f);
   if (restarts) *restarts = 0;
   long t = 0;
-  auto blend = [](const std::vector<double>& a, const std::vector<double>& b, double beta) {
-    std::vector<double> v = a;
-    for (std::size_t q = 0; q < v.size(); ++q) v[q] = a[q] + beta * (a[q] - b[q]);
-    return v;
-  };
   for (int it = 0; it < iters; ++it) {
     const double beta = t == 0 ? 0.0 : double(t) / double(t + 3);
-    std::vector<double> v = blend(x, xp, beta), yv = blend(y, yp, beta), wv = blend(w, wp, beta);
-    mm.step(v, yv, wv);
-    const double Fn = mm.F(v, yv, wv), fn = ml_cost(net, v);
-    if (beta > 0 && !(Fn <= F && fn <= f)) {  // reject: restart from x with its best (y, w)
+    std::vector<double> v = x, yv = y;
+    for (std::size_t q = 0; q < v.size(); ++q) v[q] = x[q] + beta * (x[q] - xp[q]);
+    for (std::size_t q = 0; q < yv.size(); ++q) yv[q] = y[q] + beta * (y[q] - yp[q]);
+    r.step(v, yv);
+    const double Fn = r.Phi(v, yv), fn = cost(v);
+    if (beta > 0 && !(Fn <= F && fn <= f)) {  // reject: restart from x with its best y
       t = 0;
-      mm.best(x, &y, &w);
-      F = mm.F(x, y, w);
+      y = r.best_y(x);
+      F = r.Phi(x, y);
       if (restarts) ++*restarts;
     } else {
       xp.swap(x);
       x.swap(v);
       yp.swap(y);
       y.swap(yv);
-      wp.swap(w);
-      w.swap(wv);
       F = Fn;
       f = fn;
       ++t;
@@ -240,6 +216,24 @@ std::vector<double> mm_accel(const Network& net, const std::vector<double>& x0, 
     if (ml) ml->push_back(f);
   }
   return x;
+}
+}  // namespace
+
+std::vector<double> mm(const Network& net, const std::vector<double>& x0, int iters, std::vector<double>* surrogate) {
+  const PlainMM mm(net);
+  std::vector<double> x = x0, y = mm.best_y(x0);
+  if (surrogate) surrogate->assign(1, mm.Phi(x, y));
+  for (int t = 0; t < iters; ++t) {
+    mm.step(x, y);
+    if (surrogate) surrogate->push_back(mm.Phi(x, y));
+  }
+  return x;
+}
+
+std::vector<double> mm_accel(const Network& net, const std::vector<double>& x0, int iters, std::vector<double>* ml,
+                             int* restarts) {
+  return accelerated_mm(
+      PlainMM(net), [&](const std::vector<double>& x) { return ml_cost(net, x); }, x0, iters, ml, restarts);
 }
 
 namespace {
@@ -546,36 +540,9 @@ std::vector<double> model_mm(const Network& net, const Model& m, const std::vect
 
 std::vector<double> model_mm_accel(const Network& net, const Model& m, const std::vector<double>& x0, int iters,
                                    std::vector<double>* ml, int* restarts) {
-  const ModelMMRef r(net, m);
-  std::vector<double> x = x0, y = r.best_y(x0), xp = x, yp = y;
-  double F = r.Phi(x, y), f = model_ml_cost(net, m, x);
-  if (ml) ml->assign(1, f);
-  if (restarts) *restarts = 0;
-  long t = 0;
-  for (int it = 0; it < iters; ++it) {
-    const double beta = t == 0 ? 0.0 : double(t) / double(t + 3);
-    std::vector<double> v = x, yv = y;
-    for (std::size_t q = 0; q < v.size(); ++q) v[q] = x[q] + beta * (x[q] - xp[q]);
-    for (std::size_t q = 0; q < yv.size(); ++q) yv[q] = y[q] + beta * (y[q] - yp[q]);
-    r.step(v, yv);
-    const double Fn = r.Phi(v, yv), fn = model_ml_cost(net, m, v);
-    if (beta > 0 && !(Fn <= F && fn <= f)) {  // reject: restart from x with its best y
-      t = 0;
-      y = r.best_y(x);
-      F = r.Phi(x, y);
-      if (restarts) ++*restarts;
-    } else {
-      xp.swap(x);
-      x.swap(v);
-      yp.swap(y);
-      y.swap(yv);
-      F = Fn;
-      f = fn;
-      ++t;
-    }
-    if (ml) ml->push_back(f);
-  }
-  return x;
+  return accelerated_mm(
+      ModelMMRef(net, m), [&](const std::vector<double>& x) { return model_ml_cost(net, m, x); }, x0, iters, ml,
+      restarts);
 }
 
 namespace {
