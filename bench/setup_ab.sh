@@ -30,6 +30,7 @@ REPS=${REPS:-2}
 LABELS=${LABELS:-"A B"}
 WORK=${WORK:-/tmp/snl-ab}
 PY=/usr/bin/python3
+ROOT=$(cd "$(dirname "$0")/.." && pwd)  # binaries inside the repository are printed relative to it
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 mkdir -p "$WORK"
 rec="$WORK/records.jsonl"
@@ -38,7 +39,8 @@ for l in $LABELS; do
   : "${!l:?$l: an snl binary}"
   ev=${l}_ENV
   pv=${l}_PART
-  envs+=" $l=${!l}${!ev:+ (${!ev})} --partition ${!pv:-${PARTITION:-metis}}"
+  bin=$(realpath -m "${!l}")
+  envs+=" $l=${bin#"$ROOT"/}${!ev:+ (${!ev})} --partition ${!pv:-${PARTITION:-metis}}"
 done
 echo "# $(date -u +%FT%TZ)$envs, $(nproc) cores, load: $(cut -d' ' -f1-3 /proc/loadavg)"
 for net in $NETS; do
@@ -68,16 +70,19 @@ r.update({k: v for k, v in j.items() if k.startswith("setup_") or k in ("peak_rs
                                                                     "read_seconds", "solve_seconds", "write_seconds",
                                                                     "start_seconds", "iterations", "ml_cost")})
 r.update({k: v for k, v in j.items() if k.endswith("_iterate_seconds")})
-its = max(1, j["iterations"] // 2)  # the pipeline's two phases, ITERS each
-r.update({p + "_ms_per_iteration": 1e3 * j.get(p + "_iterate_seconds", 0) / its for p in ("relaxation", "mm", "mm-accel")})
+two_phases = j.get("algorithm") == "pipeline"  # the default ARGS: two phases, ITERS each
+its = max(1, j["iterations"] // 2)
+r.update({p + "_ms_per_iteration": 1e3 * j.get(p + "_iterate_seconds", 0) / its for p in ("relaxation", "mm", "mm-accel")
+          if two_phases})
 with open(rec, "a") as f:
     f.write(json.dumps(r) + "\n")
 g = lambda k: r.get("setup_graph." + k + "_seconds", 0)
 print(f"n={n} np={np_} {which}{rep} ({r['allocator']}, {r.get('partition')}, cut {r.get('edge_cut')}) load {load}: "
       f"wall {r['wall']:.2f} s, setup {r['setup_seconds']:.2f} (partition {r['setup_partition_seconds']:.2f}), "
-      f"read {r.get('read_seconds', 0):.2f}, solve {r.get('solve_seconds', 0):.2f}, ms/iteration relaxation "
-      f"{r['relaxation_ms_per_iteration']:.2f} MM {r['mm_ms_per_iteration']:.2f} mm-accel {r['mm-accel_ms_per_iteration']:.2f}, "
-      f"graph {r['setup_graph_seconds']:.2f} (exchange {g('exchange'):.2f}, lists {g('lists'):.2f}, "
+      f"read {r.get('read_seconds', 0):.2f}, solve {r.get('solve_seconds', 0):.2f}, "
+      + (f"ms/iteration relaxation {r['relaxation_ms_per_iteration']:.2f} MM {r['mm_ms_per_iteration']:.2f} "
+         f"mm-accel {r['mm-accel_ms_per_iteration']:.2f}, " if two_phases else "")
+      + f"graph {r['setup_graph_seconds']:.2f} (exchange {g('exchange'):.2f}, lists {g('lists'):.2f}, "
       f"order {g('order'):.2f}, csr {g('csr'):.2f}), build bytes/rank {max(r['setup_graph_build_bytes_per_rank'])}, "
       f"peak RSS/rank {max(r['peak_rss_bytes_per_rank'])}, same positions {same}; start {r.get('start_seconds', 0):.2f} s, "
       f"iterations {r['iterations']}, ML cost {r['ml_cost']:.10g}, seconds iterating: "

@@ -39,10 +39,12 @@ Summary solve(const Network& w, const std::string& alg, int iters, const std::st
   return solver.solve(random_initial_positions(prob, 5), nullptr);
 }
 
-// Positions after `iters` iterations with sparse records (so that no record
-// asks for the exact costs between the acceptance tests).
-std::vector<double> positions_after(const Network& w, int iters, const char* sums) {
-  setenv("SNL_TEST_ACCEPT", sums, 1);
+// `iters` iterations from random_initial_positions(prob, 5) with sparse
+// records (so that no record asks for the exact costs between the acceptance
+// tests); sums: SNL_TEST_ACCEPT's choice (nullptr: the default). The start
+// and the end positions, gathered, into *x0 and *x.
+Summary run_sparse(const Network& w, int iters, const char* sums, std::vector<double>* x0, std::vector<double>* x) {
+  if (sums) setenv("SNL_TEST_ACCEPT", sums, 1);
   LocalizationProblem prob(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kMetis, nullptr);
   SolverOptions opt;
   opt.algorithm = "mm-accel";
@@ -50,9 +52,18 @@ std::vector<double> positions_after(const Network& w, int iters, const char* sum
   opt.tol = 0;
   opt.history_every = 1000000;
   Solver solver(prob, opt);
+  const auto start = random_initial_positions(prob, 5);
+  std::vector<double> owned;
+  const Summary s = solver.solve(start, &owned);
+  if (sums) unsetenv("SNL_TEST_ACCEPT");
+  if (x0) *x0 = allgather_positions(prob, start);
+  *x = allgather_positions(prob, owned);
+  return s;
+}
+
+std::vector<double> positions_after(const Network& w, int iters, const char* sums) {
   std::vector<double> x;
-  solver.solve(random_initial_positions(prob, 5), &x);
-  unsetenv("SNL_TEST_ACCEPT");
+  run_sparse(w, iters, sums, nullptr, &x);
   return x;
 }
 
@@ -69,19 +80,10 @@ TEST(MMAccel, MatchesItsSerialReferenceTwin) {
     const int dim = seed % 3 == 0 ? 3 : 2;
     const Network w = make_network({.n = 60, .dim = dim, .radius = dim == 3 ? 0.5 : 0.3, .anchor_radius = 0.35,
                                     .sigma = 0.05, .seed = seed});
-    LocalizationProblem prob(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kMetis, nullptr);
-    SolverOptions opt;
-    opt.algorithm = "mm-accel";
-    opt.max_iter = 300;
-    opt.tol = 0;
-    opt.history_every = 1000000;
-    Solver solver(prob, opt);
-    const auto x0 = random_initial_positions(prob, 5);
-    std::vector<double> x;
-    const Summary s = solver.solve(x0, &x);
-    const auto xs = allgather_positions(prob, x);
+    std::vector<double> x0, xs;
+    const Summary s = run_sparse(w, 300, nullptr, &x0, &xs);
     int restarts = -1;
-    const auto xr = reference::mm_accel(w, allgather_positions(prob, x0), 300, nullptr, &restarts);
+    const auto xr = reference::mm_accel(w, x0, 300, nullptr, &restarts);
     ASSERT_EQ(xs.size(), xr.size());
     for (std::size_t t = 0; t < xs.size(); ++t) ASSERT_NEAR(xs[t], xr[t], 1e-10) << "seed " << seed << " at " << t;
     double snl_rejected = -1;
