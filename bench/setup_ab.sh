@@ -68,7 +68,8 @@ r = {"n": int(n), "ranks": int(np_), "build": which, "rep": int(rep), "wall": fl
      "positions_equal_first_A": same, "allocator": j.get("allocator", "system")}
 r.update({k: v for k, v in j.items() if k.startswith("setup_") or k in ("peak_rss_bytes_per_rank", "partition", "edge_cut", "ghosts",
                                                                     "read_seconds", "solve_seconds", "write_seconds",
-                                                                    "start_seconds", "iterations", "ml_cost")})
+                                                                    "start_seconds", "start_paths_seconds", "start_rounds",
+                                                                    "iterations", "ml_cost")})
 r.update({k: v for k, v in j.items() if k.endswith("_iterate_seconds")})
 two_phases = j.get("algorithm") == "pipeline"  # the default ARGS: two phases, ITERS each
 its = max(1, j["iterations"] // 2)
@@ -84,7 +85,8 @@ print(f"n={n} np={np_} {which}{rep} ({r['allocator']}, {r.get('partition')}, cut
          f"mm-accel {r['mm-accel_ms_per_iteration']:.2f}, " if two_phases else "")
       + f"graph {r['setup_graph_seconds']:.2f} (exchange {g('exchange'):.2f}, lists {g('lists'):.2f}, "
       f"order {g('order'):.2f}, csr {g('csr'):.2f}), build bytes/rank {max(r['setup_graph_build_bytes_per_rank'])}, "
-      f"peak RSS/rank {max(r['peak_rss_bytes_per_rank'])}, same positions {same}; start {r.get('start_seconds', 0):.2f} s, "
+      f"peak RSS/rank {max(r['peak_rss_bytes_per_rank'])}, same positions {same}; start {r.get('start_seconds', 0):.2f} s "
+      f"(paths {r.get('start_paths_seconds', 0):.2f} s, {r.get('start_rounds', 0)} rounds), "
       f"iterations {r['iterations']}, ML cost {r['ml_cost']:.10g}, seconds iterating: "
       + ", ".join(f"{k[:-len('_iterate_seconds')]} {v:.2f}" for k, v in r.items() if k.endswith("_iterate_seconds")))
 PYEOF

@@ -1,5 +1,6 @@
-// The distance-vector start (dv_start.hpp): anchor path lists by a
-// synchronous distributed Bellman-Ford, their calibration, multilateration.
+// The distance-vector start (dv_start.hpp): anchor path lists by a synchronous
+// distributed label-correcting search in distance order, their calibration,
+// multilateration.
 #include "snl/solvers/dv_start.hpp"
 
 #include <mpi.h>
@@ -16,11 +17,14 @@ namespace snl {
 namespace {
 
 // A sensor's list: up to k (id, distance) entries ascending by (distance, id),
-// one entry per anchor. offer() keeps the k best of everything offered, in any
-// order of offers (an anchor pushed out never comes back: k better ones stay).
+// one entry per anchor, each with a flag "offered to the neighbours". offer()
+// keeps the k best of everything offered, in any order of offers (an anchor
+// pushed out never comes back: k better ones stay); a new or shortened entry
+// is not yet offered.
 struct List {
   std::int32_t* id;
   double* d;
+  std::uint8_t* sent;
   int k;
   bool offer(std::int32_t a, double dist) {
     // Beyond a full list's last distance: neither a new entry nor shorter.
@@ -38,24 +42,15 @@ struct List {
     while (at > 0 && (id[at - 1] < 0 || dist < d[at - 1] || (dist == d[at - 1] && a < id[at - 1]))) {
       id[at] = id[at - 1];
       d[at] = d[at - 1];
+      sent[at] = sent[at - 1];
       --at;
     }
     id[at] = a;
     d[at] = dist;
+    sent[at] = 0;
     return true;
   }
 };
-
-// Bit t: entry t of l is not in `before` (a row: (id, distance) x k).
-std::uint16_t new_entries(const List& l, const double* before) {
-  std::uint16_t m = 0;
-  for (int t = 0; t < l.k && l.id[t] >= 0; ++t) {
-    bool seen = false;
-    for (int s = 0; s < l.k && !seen; ++s) seen = before[2 * s] == l.id[t] && before[2 * s + 1] == l.d[t];
-    if (!seen) m |= std::uint16_t(1u << t);
-  }
-  return m;
-}
 
 }  // namespace
 
@@ -64,70 +59,149 @@ int dv_start_anchors(int dim) { return 3 * dim; }
 AnchorPaths nearest_anchor_paths(LocalizationProblem& prob, int k) {
   const DistGraph& g = prob.graph();
   const LocalId n = g.num_owned(), nl = g.num_local();
-  const int w = 2 * k + 1;  // the exchanged row: (id, distance) x k, then "changed last round"
+  const int w = 2 * k + 1;  // the exchanged row: (id, distance) x k, then the mask of entries offered
   AnchorPaths out;
   out.k = k;
   out.ids.assign(std::size_t(n) * k, -1);
   out.dist.assign(std::size_t(n) * k, 0.0);
+  std::vector<std::uint8_t> sent(std::size_t(n) * k, 0);
+  auto list = [&](LocalId v) {
+    const std::size_t at = std::size_t(v) * k;
+    return List{&out.ids[at], &out.dist[at], &sent[at], k};
+  };
   // Round 0: each sensor's own anchor measurements.
   const auto& aoff = prob.anchor_offsets();
+  double longest = 0;  // the longest measured range
   for (LocalId v = 0; v < n; ++v) {
-    List l{&out.ids[std::size_t(v) * k], &out.dist[std::size_t(v) * k], k};
-    for (auto e = aoff[v]; e < aoff[v + 1]; ++e) l.offer(prob.anchor_ids()[e], prob.anchor_ranges()[e]);
+    List l = list(v);
+    for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
+      l.offer(prob.anchor_ids()[e], prob.anchor_ranges()[e]);
+      longest = std::max(longest, prob.anchor_ranges()[e]);
+    }
   }
-  // rows: the lists as the previous round left them (a snapshot the round
-  // reads, so that every list is updated from its neighbours' previous lists
-  // whichever rank owns them), with a mask of the entries that are new since
-  // the round before: only those are offered (an entry offered once and
-  // refused stays refused, as lists only improve). fresh: that mask per local
-  // node, in a small array the neighbour loops read instead of the rows.
+  const auto& off = g.offsets();
+  const auto& adj = g.adjacency();
+  for (std::size_t e = 0; e < adj.size(); ++e) longest = std::max(longest, g.edge_value(e));
+  MPI_Allreduce(MPI_IN_PLACE, &longest, 1, MPI_DOUBLE, MPI_MAX, prob.comm());
+  // Label-correcting in distance order (Delta-stepping's idea, Meyer & Sanders,
+  // J. Algorithms 49, 2003): an entry is offered once the round's threshold
+  // reaches its distance, the threshold growing by kStep of the longest range
+  // per round, or jumping to the nearest entry not yet offered. Bellman-Ford,
+  // offering every entry at once, ends in the same lists (the k nearest
+  // anchors by shortest path are the one fixed point whatever the order of
+  // the offers, and each path's length is summed from its anchor in the same
+  // order), but most of its entries come on paths of few hops and are
+  // replaced by shorter ones rounds later: in distance order about a quarter
+  // as many are offered, for a few more rounds.
+  constexpr double kStep = 0.15;
+  const double step = kStep * longest;
+  // rows: a snapshot of the entries each list offers this round (their mask
+  // last), taken before any list of the round changes, so that each round's
+  // lists are the k best of the last round's and their neighbours' offers
+  // whichever rank owns them. Offers are pushed from the lists that offer to
+  // their neighbours (a ghost's through ghost_edges), so that a round costs
+  // what it offers. pending: the nearest entry a list has not offered
+  // (infinity: none).
   static_assert(sizeof(std::uint16_t) * 8 >= 9, "3p entries in 3D");
   std::vector<double> rows(std::size_t(nl) * w, -1.0);  // ids -1: no entry
   for (LocalId u = 0; u < nl; ++u) rows[std::size_t(u) * w + 2 * k] = 0;  // masks
-  std::vector<std::uint16_t> fresh(nl, 0), was(n, 0), next(n, 0);
-  for (LocalId v = 0; v < n; ++v)
-    for (int t = 0; t < k; ++t)
-      if (out.ids[std::size_t(v) * k + t] >= 0) fresh[v] |= std::uint16_t(1u << t);
-  const auto& off = g.offsets();
-  const auto& adj = g.adjacency();
+  auto nearest_unsent = [&](LocalId v) {
+    const List l = list(v);
+    for (int t = 0; t < k && l.id[t] >= 0; ++t)
+      if (!l.sent[t]) return l.d[t];  // ascending: the first is the nearest
+    return double(INFINITY);
+  };
+  std::vector<double> pending(n);
+  for (LocalId v = 0; v < n; ++v) pending[v] = nearest_unsent(v);
+  // Per ghost (CSR by ghost_offsets) its owned neighbours and their edge to it.
+  struct GhostEdge {
+    LocalId owned;
+    std::int64_t edge;
+  };
+  const LocalId ng = nl - n;
+  std::vector<std::int64_t> ghost_offsets(std::size_t(ng) + 1, 0);
+  for (LocalId v = g.num_interior(); v < n; ++v)
+    for (auto e = off[v]; e < off[v + 1]; ++e)
+      if (adj[e] >= n) ++ghost_offsets[std::size_t(adj[e] - n) + 1];
+  for (LocalId q = 0; q < ng; ++q) ghost_offsets[q + 1] += ghost_offsets[q];
+  std::vector<GhostEdge> ghost_edges(std::size_t(ghost_offsets[ng]));
+  {
+    std::vector<std::int64_t> at(ghost_offsets.begin(), ghost_offsets.end() - 1);
+    for (LocalId v = g.num_interior(); v < n; ++v)
+      for (auto e = off[v]; e < off[v + 1]; ++e)
+        if (adj[e] >= n) ghost_edges[std::size_t(at[adj[e] - n]++)] = {v, e};
+  }
+  std::vector<LocalId> senders, changed;
+  std::vector<std::uint8_t> is_changed(n, 0);
+  // The entries of row r in mask m offered to v across a range dvu (a pair's
+  // range is the same from either end).
+  auto push = [&](const double* r, unsigned m, LocalId v, double dvu) {
+    List l = list(v);
+    bool any = false;
+    for (unsigned b = m; b; b &= b - 1) {  // the set bits, lowest first
+      const int t = __builtin_ctz(b);
+      any |= l.offer(static_cast<std::int32_t>(r[2 * t]), r[2 * t + 1] + dvu);
+    }
+    if (any && !is_changed[v]) {
+      is_changed[v] = 1;
+      changed.push_back(v);
+    }
+  };
   HaloPlan& halo = prob.graph().halo();
+  double reach = step;  // the round's threshold
   for (;;) {
+    for (const LocalId v : senders) rows[std::size_t(v) * w + 2 * k] = 0;  // last round's masks, cleared
+    senders.clear();
     for (LocalId v = 0; v < n; ++v) {
-      if (!fresh[v] && !was[v]) continue;  // the row holds this list, mask 0
+      if (!(pending[v] <= reach)) continue;
+      List l = list(v);
+      unsigned m = 0;
+      for (int t = 0; t < k && l.id[t] >= 0; ++t)
+        if (!l.sent[t] && l.d[t] <= reach) {
+          m |= 1u << t;
+          l.sent[t] = 1;
+        }
       double* r = &rows[std::size_t(v) * w];
-      for (int t = 0; t < k; ++t) {
-        r[2 * t] = out.ids[std::size_t(v) * k + t];
-        r[2 * t + 1] = out.dist[std::size_t(v) * k + t];
+      for (unsigned b = m; b; b &= b - 1) {
+        const int t = __builtin_ctz(b);
+        r[2 * t] = l.id[t];
+        r[2 * t + 1] = l.d[t];
       }
-      r[2 * k] = fresh[v];
+      r[2 * k] = m;
+      senders.push_back(v);
+      pending[v] = nearest_unsent(v);
     }
     halo.exchange(rows.data(), w);
     ++out.rounds;
-    for (LocalId u = n; u < nl; ++u) fresh[u] = static_cast<std::uint16_t>(rows[std::size_t(u) * w + 2 * k]);
-    std::copy(fresh.begin(), fresh.begin() + n, was.begin());  // the masks the rows now hold
-    std::int64_t moved = 0;
-    for (LocalId v = 0; v < n; ++v) {
-      List l{&out.ids[std::size_t(v) * k], &out.dist[std::size_t(v) * k], k};
-      bool any = false;
-      for (auto e = off[v]; e < off[v + 1]; ++e) {
-        const LocalId u = adj[e];
-        const unsigned m = fresh[u];
-        if (!m) continue;  // nothing new since it was last offered
-        const double* r = &rows[std::size_t(u) * w];
-        const double dvu = g.edge_value(e);
-        for (unsigned b = m; b; b &= b - 1) {  // the set bits, lowest first (a data-dependent test per bit mispredicts)
-          const int t = __builtin_ctz(b);
-          if (r[2 * t] >= 0) any |= l.offer(static_cast<std::int32_t>(r[2 * t]), r[2 * t + 1] + dvu);
-        }
-      }
-      // Not fresh[v]: later nodes of this round read the previous round's masks.
-      next[v] = any ? new_entries(l, &rows[std::size_t(v) * w]) : 0;
-      moved += any;
+    for (const LocalId u : senders) {
+      const double* r = &rows[std::size_t(u) * w];
+      const unsigned m = static_cast<unsigned>(r[2 * k]);
+      for (auto e = off[u]; e < off[u + 1]; ++e)
+        if (adj[e] < n) push(r, m, adj[e], g.edge_value(e));
     }
-    std::copy(next.begin(), next.end(), fresh.begin());
-    long long all = 0, mine = moved;
-    MPI_Allreduce(&mine, &all, 1, MPI_LONG_LONG, MPI_SUM, prob.comm());
-    if (all == 0) break;
+    for (LocalId q = 0; q < ng; ++q) {
+      const double* r = &rows[std::size_t(n + q) * w];
+      const unsigned m = static_cast<unsigned>(r[2 * k]);
+      if (!m) continue;
+      for (auto j = ghost_offsets[q]; j < ghost_offsets[q + 1]; ++j) {
+        const GhostEdge& ge = ghost_edges[std::size_t(j)];
+        push(r, m, ge.owned, g.edge_value(ge.edge));
+      }
+    }
+    for (const LocalId v : changed) {
+      is_changed[v] = 0;
+      pending[v] = nearest_unsent(v);
+    }
+    changed.clear();
+    double mine[2] = {INFINITY, 0};  // the nearest entry not offered; minus the lists with one
+    for (LocalId v = 0; v < n; ++v)
+      if (pending[v] < INFINITY) {
+        mine[0] = std::min(mine[0], pending[v]);
+        mine[1] -= 1;
+      }
+    MPI_Allreduce(MPI_IN_PLACE, mine, 2, MPI_DOUBLE, MPI_MIN, prob.comm());
+    if (mine[1] == 0) break;  // every entry offered, none taken since
+    reach = std::max(reach + step, mine[0]);
   }
   return out;
 }
@@ -249,7 +323,13 @@ void place(const double* an, const std::int32_t* id, const double* dist, int k, 
     for (int a = 0; a < P; ++a) ns += s[a] * s[a];
     ns = std::sqrt(ns);
     const double scale = ns > 0.5 * rmin ? 0.5 * rmin / ns : 1.0;
-    for (int a = 0; a < P; ++a) x[a] -= scale * s[a];
+    bool moved = false;
+    for (int a = 0; a < P; ++a) {
+      const double xa = x[a] - scale * s[a];
+      moved |= xa != x[a];
+      x[a] = xa;
+    }
+    if (!moved) break;  // a fixed point: the remaining steps would repeat this one
   }
 }
 

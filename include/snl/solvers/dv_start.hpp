@@ -2,8 +2,8 @@
 // The distance-vector start of dv-pipeline (the default of snl solve): every
 // sensor learns its path distances to its K nearest anchors (sums of measured
 // ranges along the shortest path through the sensor graph, a distributed
-// Bellman-Ford with one halo exchange per round; "DV-distance", Niculescu &
-// Nath, IEEE INFOCOM 2003), the path lengths are calibrated by one global factor
+// label-correcting search in distance order with one halo exchange per round;
+// "DV-distance", Niculescu & Nath, IEEE INFOCOM 2003), the path lengths are calibrated by one global factor
 // (anchor-to-anchor straight distances over their shortest paths, whose noise
 // makes them shorter than the truth), and each sensor places itself by
 // least-squares multilateration against those anchors. The start is a few
@@ -30,7 +30,9 @@ struct AnchorPaths {
 
 /// Collective: the k nearest anchors of every owned sensor by shortest path
 /// (the same lists, bit for bit, on any number of ranks: each round is a
-/// synchronous update from the previous round's lists, ties broken by anchor id).
+/// synchronous update from the previous round's lists, ties broken by anchor
+/// id; the lists are the one fixed point of such updates, so the order in
+/// which entries are offered sets the rounds and the work, not the lists).
 AnchorPaths nearest_anchor_paths(LocalizationProblem& prob, int k);
 
 /// Collective: sum of |a - b| over sum of the shortest measured path a -> b,
