@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
+#include <vector>
 
 #include "core/exact_sum.hpp"
 #include "snl/core/mpi_util.hpp"
@@ -52,158 +54,206 @@ struct List {
   }
 };
 
-}  // namespace
-
-int dv_start_anchors(int dim) { return 3 * dim; }
-
-AnchorPaths nearest_anchor_paths(LocalizationProblem& prob, int k) {
-  const DistGraph& g = prob.graph();
-  const LocalId n = g.num_owned(), nl = g.num_local();
-  const int w = 2 * k + 1;  // the exchanged row: (id, distance) x k, then the mask of entries offered
-  AnchorPaths out;
-  out.k = k;
-  out.ids.assign(std::size_t(n) * k, -1);
-  out.dist.assign(std::size_t(n) * k, 0.0);
-  std::vector<std::uint8_t> sent(std::size_t(n) * k, 0);
-  auto list = [&](LocalId v) {
-    const std::size_t at = std::size_t(v) * k;
-    return List{&out.ids[at], &out.dist[at], &sent[at], k};
-  };
-  // Round 0: each sensor's own anchor measurements.
-  const auto& aoff = prob.anchor_offsets();
-  double longest = 0;  // the longest measured range
-  for (LocalId v = 0; v < n; ++v) {
-    List l = list(v);
-    for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
-      l.offer(prob.anchor_ids()[e], prob.anchor_ranges()[e]);
-      longest = std::max(longest, prob.anchor_ranges()[e]);
-    }
-  }
-  const auto& off = g.offsets();
-  const auto& adj = g.adjacency();
-  for (std::size_t e = 0; e < adj.size(); ++e) longest = std::max(longest, g.edge_value(e));
-  MPI_Allreduce(MPI_IN_PLACE, &longest, 1, MPI_DOUBLE, MPI_MAX, prob.comm());
-  // Label-correcting in distance order (Delta-stepping's idea, Meyer & Sanders,
-  // J. Algorithms 49, 2003): an entry is offered once the round's threshold
-  // reaches its distance, the threshold growing by kStep of the longest range
-  // per round, or jumping to the nearest entry not yet offered. Bellman-Ford,
-  // offering every entry at once, ends in the same lists (the k nearest
-  // anchors by shortest path are the one fixed point whatever the order of
-  // the offers, and each path's length is summed from its anchor in the same
-  // order), but most of its entries come on paths of few hops and are
-  // replaced by shorter ones rounds later: in distance order about a quarter
-  // as many are offered, for a few more rounds.
-  constexpr double kStep = 0.15;
-  const double step = kStep * longest;
-  // rows: a snapshot of the entries each list offers this round (their mask
-  // last), taken before any list of the round changes, so that each round's
-  // lists are the k best of the last round's and their neighbours' offers
-  // whichever rank owns them. Offers are pushed from the lists that offer to
-  // their neighbours (a ghost's through ghost_edges), so that a round costs
-  // what it offers. pending: the nearest entry a list has not offered
-  // (infinity: none).
-  static_assert(sizeof(std::uint16_t) * 8 >= 9, "3p entries in 3D");
-  std::vector<double> rows(std::size_t(nl) * w, -1.0);  // ids -1: no entry
-  for (LocalId u = 0; u < nl; ++u) rows[std::size_t(u) * w + 2 * k] = 0;  // masks
-  auto nearest_unsent = [&](LocalId v) {
-    const List l = list(v);
-    for (int t = 0; t < k && l.id[t] >= 0; ++t)
-      if (!l.sent[t]) return l.d[t];  // ascending: the first is the nearest
-    return double(INFINITY);
-  };
-  std::vector<double> pending(n);
-  for (LocalId v = 0; v < n; ++v) pending[v] = nearest_unsent(v);
-  // Per ghost (CSR by ghost_offsets) its owned neighbours and their edge to it.
-  struct GhostEdge {
+// Per ghost (CSR by `offsets`), its owned neighbours and their edge to it:
+// the owned lists a ghost's offers go to.
+struct GhostEdges {
+  struct Edge {
     LocalId owned;
     std::int64_t edge;
   };
-  const LocalId ng = nl - n;
-  std::vector<std::int64_t> ghost_offsets(std::size_t(ng) + 1, 0);
-  for (LocalId v = g.num_interior(); v < n; ++v)
-    for (auto e = off[v]; e < off[v + 1]; ++e)
-      if (adj[e] >= n) ++ghost_offsets[std::size_t(adj[e] - n) + 1];
-  for (LocalId q = 0; q < ng; ++q) ghost_offsets[q + 1] += ghost_offsets[q];
-  std::vector<GhostEdge> ghost_edges(std::size_t(ghost_offsets[ng]));
-  {
-    std::vector<std::int64_t> at(ghost_offsets.begin(), ghost_offsets.end() - 1);
+  std::vector<std::int64_t> offsets;
+  std::vector<Edge> edges;
+
+  explicit GhostEdges(const DistGraph& g) {
+    const LocalId n = g.num_owned(), ng = g.num_local() - n;
+    const auto& off = g.offsets();
+    const auto& adj = g.adjacency();
+    offsets.assign(std::size_t(ng) + 1, 0);
     for (LocalId v = g.num_interior(); v < n; ++v)
       for (auto e = off[v]; e < off[v + 1]; ++e)
-        if (adj[e] >= n) ghost_edges[std::size_t(at[adj[e] - n]++)] = {v, e};
+        if (adj[e] >= n) ++offsets[std::size_t(adj[e] - n) + 1];
+    for (LocalId q = 0; q < ng; ++q) offsets[q + 1] += offsets[q];
+    edges.resize(std::size_t(offsets[ng]));
+    std::vector<std::int64_t> at(offsets.begin(), offsets.end() - 1);
+    for (LocalId v = g.num_interior(); v < n; ++v)
+      for (auto e = off[v]; e < off[v + 1]; ++e)
+        if (adj[e] >= n) edges[std::size_t(at[adj[e] - n]++)] = {v, e};
   }
-  std::vector<LocalId> senders, changed;
-  std::vector<std::uint8_t> is_changed(n, 0);
+};
+
+// The search for the k nearest anchors of every owned sensor, a label-
+// correcting search in distance order (Delta-stepping's idea, Meyer & Sanders,
+// J. Algorithms 49, 2003): an entry is offered once the round's threshold
+// reaches its distance, the threshold growing by kStep of the longest range
+// per round, or jumping to the nearest entry not yet offered. Bellman-Ford,
+// offering every entry at once, ends in the same lists (the k nearest anchors
+// by shortest path are the one fixed point whatever the order of the offers,
+// and each path's length is summed from its anchor in the same order), but
+// most of its entries come on paths of few hops and are replaced by shorter
+// ones rounds later: in distance order about a quarter as many are offered,
+// for a few more rounds.
+//
+// rows: a snapshot of the entries each list offers this round (their mask
+// last), taken before any list of the round changes, so that each round's
+// lists are the k best of the last round's and their neighbours' offers
+// whichever rank owns them. Offers are pushed from the lists that offer to
+// their neighbours (a ghost's through GhostEdges), so that a round costs what
+// it offers. pending: the nearest entry a list has not offered (infinity: none).
+class PathSearch {
+ public:
+  static constexpr double kStep = 0.15;
+
+  PathSearch(LocalizationProblem& prob, int k)
+      : prob_(prob), g_(prob.graph()), k_(k), w_(2 * k + 1), n_(g_.num_owned()), ghosts_(g_) {
+    out_.k = k;
+    out_.ids.assign(std::size_t(n_) * k, -1);
+    out_.dist.assign(std::size_t(n_) * k, 0.0);
+    sent_.assign(std::size_t(n_) * k, 0);
+    rows_.assign(std::size_t(g_.num_local()) * w_, -1.0);  // ids -1: no entry
+    for (LocalId u = 0; u < g_.num_local(); ++u) rows_[std::size_t(u) * w_ + 2 * k] = 0;  // masks
+    is_changed_.assign(n_, 0);
+  }
+
+  /// Round 0: each sensor's own anchor measurements. Returns the threshold's step.
+  double seed_lists() {
+    const auto& aoff = prob_.anchor_offsets();
+    double longest = 0;  // the longest measured range
+    for (LocalId v = 0; v < n_; ++v) {
+      List l = list(v);
+      for (auto e = aoff[v]; e < aoff[v + 1]; ++e) {
+        l.offer(prob_.anchor_ids()[e], prob_.anchor_ranges()[e]);
+        longest = std::max(longest, prob_.anchor_ranges()[e]);
+      }
+    }
+    for (std::size_t e = 0; e < g_.adjacency().size(); ++e) longest = std::max(longest, g_.edge_value(e));
+    MPI_Allreduce(MPI_IN_PLACE, &longest, 1, MPI_DOUBLE, MPI_MAX, prob_.comm());
+    pending_.resize(n_);
+    for (LocalId v = 0; v < n_; ++v) pending_[v] = nearest_unsent(v);
+    return kStep * longest;
+  }
+
+  /// The entries within `reach` not yet offered go into their lists' rows,
+  /// marked offered; the rows go to the ranks that hold them as ghosts.
+  void post(double reach) {
+    for (const LocalId v : senders_) rows_[std::size_t(v) * w_ + 2 * k_] = 0;  // last round's masks, cleared
+    senders_.clear();
+    for (LocalId v = 0; v < n_; ++v) {
+      if (!(pending_[v] <= reach)) continue;
+      List l = list(v);
+      unsigned m = 0;
+      for (int t = 0; t < k_ && l.id[t] >= 0; ++t)
+        if (!l.sent[t] && l.d[t] <= reach) {
+          m |= 1u << t;
+          l.sent[t] = 1;
+        }
+      double* r = &rows_[std::size_t(v) * w_];
+      for (unsigned b = m; b; b &= b - 1) {
+        const int t = __builtin_ctz(b);
+        r[2 * t] = l.id[t];
+        r[2 * t + 1] = l.d[t];
+      }
+      r[2 * k_] = m;
+      senders_.push_back(v);
+      pending_[v] = nearest_unsent(v);
+    }
+    g_.halo().exchange(rows_.data(), w_);
+    ++out_.rounds;
+  }
+
+  /// The posted entries offered to every neighbouring owned list.
+  void push() {
+    const auto& off = g_.offsets();
+    const auto& adj = g_.adjacency();
+    for (const LocalId u : senders_) {
+      const double* r = &rows_[std::size_t(u) * w_];
+      const auto m = static_cast<unsigned>(r[2 * k_]);
+      for (auto e = off[u]; e < off[u + 1]; ++e)
+        if (adj[e] < n_) offer(r, m, adj[e], g_.edge_value(e));
+    }
+    for (LocalId q = 0; q < g_.num_local() - n_; ++q) {
+      const double* r = &rows_[std::size_t(n_ + q) * w_];
+      const auto m = static_cast<unsigned>(r[2 * k_]);
+      if (!m) continue;
+      for (auto j = ghosts_.offsets[q]; j < ghosts_.offsets[q + 1]; ++j) {
+        const GhostEdges::Edge& ge = ghosts_.edges[std::size_t(j)];
+        offer(r, m, ge.owned, g_.edge_value(ge.edge));
+      }
+    }
+    for (const LocalId v : changed_) {
+      is_changed_[v] = 0;
+      pending_[v] = nearest_unsent(v);
+    }
+    changed_.clear();
+  }
+
+  /// Collective: the nearest entry not yet offered on any rank, and whether any is left.
+  std::pair<double, bool> nearest_pending() const {
+    double mine[2] = {INFINITY, 0};  // the nearest entry not offered; minus the lists with one
+    for (LocalId v = 0; v < n_; ++v)
+      if (pending_[v] < INFINITY) {
+        mine[0] = std::min(mine[0], pending_[v]);
+        mine[1] -= 1;
+      }
+    MPI_Allreduce(MPI_IN_PLACE, mine, 2, MPI_DOUBLE, MPI_MIN, prob_.comm());
+    return {mine[0], mine[1] != 0};
+  }
+
+  AnchorPaths take() { return std::move(out_); }
+
+ private:
+  List list(LocalId v) {
+    const std::size_t at = std::size_t(v) * k_;
+    return List{&out_.ids[at], &out_.dist[at], &sent_[at], k_};
+  }
+  double nearest_unsent(LocalId v) {
+    const List l = list(v);
+    for (int t = 0; t < k_ && l.id[t] >= 0; ++t)
+      if (!l.sent[t]) return l.d[t];  // ascending: the first is the nearest
+    return INFINITY;
+  }
   // The entries of row r in mask m offered to v across a range dvu (a pair's
   // range is the same from either end).
-  auto push = [&](const double* r, unsigned m, LocalId v, double dvu) {
+  void offer(const double* r, unsigned m, LocalId v, double dvu) {
     List l = list(v);
     bool any = false;
     for (unsigned b = m; b; b &= b - 1) {  // the set bits, lowest first
       const int t = __builtin_ctz(b);
       any |= l.offer(static_cast<std::int32_t>(r[2 * t]), r[2 * t + 1] + dvu);
     }
-    if (any && !is_changed[v]) {
-      is_changed[v] = 1;
-      changed.push_back(v);
+    if (any && !is_changed_[v]) {
+      is_changed_[v] = 1;
+      changed_.push_back(v);
     }
-  };
-  HaloPlan& halo = prob.graph().halo();
+  }
+
+  LocalizationProblem& prob_;
+  DistGraph& g_;
+  const int k_, w_;  // w_: the exchanged row, (id, distance) x k, then the mask of entries offered
+  const LocalId n_;
+  const GhostEdges ghosts_;
+  AnchorPaths out_;
+  std::vector<std::uint8_t> sent_;  // per entry: offered to the neighbours
+  std::vector<double> rows_, pending_;
+  std::vector<LocalId> senders_, changed_;  // this round's lists that offer; lists that took an offer
+  std::vector<std::uint8_t> is_changed_;
+};
+
+}  // namespace
+
+int dv_start_anchors(int dim) { return 3 * dim; }
+
+AnchorPaths nearest_anchor_paths(LocalizationProblem& prob, int k) {
+  PathSearch search(prob, k);
+  const double step = search.seed_lists();
   double reach = step;  // the round's threshold
   for (;;) {
-    for (const LocalId v : senders) rows[std::size_t(v) * w + 2 * k] = 0;  // last round's masks, cleared
-    senders.clear();
-    for (LocalId v = 0; v < n; ++v) {
-      if (!(pending[v] <= reach)) continue;
-      List l = list(v);
-      unsigned m = 0;
-      for (int t = 0; t < k && l.id[t] >= 0; ++t)
-        if (!l.sent[t] && l.d[t] <= reach) {
-          m |= 1u << t;
-          l.sent[t] = 1;
-        }
-      double* r = &rows[std::size_t(v) * w];
-      for (unsigned b = m; b; b &= b - 1) {
-        const int t = __builtin_ctz(b);
-        r[2 * t] = l.id[t];
-        r[2 * t + 1] = l.d[t];
-      }
-      r[2 * k] = m;
-      senders.push_back(v);
-      pending[v] = nearest_unsent(v);
-    }
-    halo.exchange(rows.data(), w);
-    ++out.rounds;
-    for (const LocalId u : senders) {
-      const double* r = &rows[std::size_t(u) * w];
-      const unsigned m = static_cast<unsigned>(r[2 * k]);
-      for (auto e = off[u]; e < off[u + 1]; ++e)
-        if (adj[e] < n) push(r, m, adj[e], g.edge_value(e));
-    }
-    for (LocalId q = 0; q < ng; ++q) {
-      const double* r = &rows[std::size_t(n + q) * w];
-      const unsigned m = static_cast<unsigned>(r[2 * k]);
-      if (!m) continue;
-      for (auto j = ghost_offsets[q]; j < ghost_offsets[q + 1]; ++j) {
-        const GhostEdge& ge = ghost_edges[std::size_t(j)];
-        push(r, m, ge.owned, g.edge_value(ge.edge));
-      }
-    }
-    for (const LocalId v : changed) {
-      is_changed[v] = 0;
-      pending[v] = nearest_unsent(v);
-    }
-    changed.clear();
-    double mine[2] = {INFINITY, 0};  // the nearest entry not offered; minus the lists with one
-    for (LocalId v = 0; v < n; ++v)
-      if (pending[v] < INFINITY) {
-        mine[0] = std::min(mine[0], pending[v]);
-        mine[1] -= 1;
-      }
-    MPI_Allreduce(MPI_IN_PLACE, mine, 2, MPI_DOUBLE, MPI_MIN, prob.comm());
-    if (mine[1] == 0) break;  // every entry offered, none taken since
-    reach = std::max(reach + step, mine[0]);
+    search.post(reach);
+    search.push();
+    const auto [nearest, left] = search.nearest_pending();
+    if (!left) break;  // every entry offered, none taken since
+    reach = std::max(reach + step, nearest);
   }
-  return out;
+  return search.take();
 }
 
 namespace {
