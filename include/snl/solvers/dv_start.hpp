@@ -3,10 +3,11 @@
 // sensor learns its path distances to its K nearest anchors (sums of measured
 // ranges along the shortest path through the sensor graph, a distributed
 // label-correcting search in distance order with one halo exchange per round;
-// "DV-distance", Niculescu & Nath, IEEE INFOCOM 2003), the path lengths are calibrated by one global factor
-// (anchor-to-anchor straight distances over their shortest paths, whose noise
-// makes them shorter than the truth), and each sensor places itself by
-// least-squares multilateration against those anchors. The start is a few
+// "DV-distance", Niculescu & Nath, IEEE INFOCOM 2003), the path lengths are
+// calibrated by one global factor (anchor-to-anchor straight distances over
+// their shortest paths, whose noise makes them shorter than the truth), and
+// each sensor places itself by least-squares multilateration against those
+// anchors. The start is a few
 // tenths of a link radius from the truth and, unlike the random start, places
 // sensors outside the anchors' hull on the side they are (docs/dv-pipeline.md).
 #include <cstdint>
