@@ -179,6 +179,19 @@ struct PlainMM {
   }
 };
 
+// MM's loop over either model's MM (plain l2 or ModelMMRef): from y at its
+// best for x0, `iters` steps; the surrogate Phi before and after each into *phi.
+template <class MM>
+std::vector<double> plain_mm(const MM& r, const std::vector<double>& x0, int iters, std::vector<double>* phi) {
+  std::vector<double> x = x0, y = r.best_y(x0);
+  if (phi) phi->assign(1, r.Phi(x, y));
+  for (int t = 0; t < iters; ++t) {
+    r.step(x, y);
+    if (phi) phi->push_back(r.Phi(x, y));
+  }
+  return x;
+}
+
 // mm-accel's loop over either model's MM (plain l2 or ModelMMRef): the MM
 // step from the extrapolated point z(k) + t/(t+3) (z(k) - z(k-1)), accepted
 // when neither Phi nor the ML cost `cost` rises, else a restart (t = 0, y at
@@ -220,14 +233,7 @@ std::vector<double> accelerated_mm(const MM& r, Cost cost, const std::vector<dou
 }  // namespace
 
 std::vector<double> mm(const Network& net, const std::vector<double>& x0, int iters, std::vector<double>* surrogate) {
-  const PlainMM mm(net);
-  std::vector<double> x = x0, y = mm.best_y(x0);
-  if (surrogate) surrogate->assign(1, mm.Phi(x, y));
-  for (int t = 0; t < iters; ++t) {
-    mm.step(x, y);
-    if (surrogate) surrogate->push_back(mm.Phi(x, y));
-  }
-  return x;
+  return plain_mm(PlainMM(net), x0, iters, surrogate);
 }
 
 std::vector<double> mm_accel(const Network& net, const std::vector<double>& x0, int iters, std::vector<double>* ml,
@@ -528,14 +534,7 @@ struct ModelMMRef {
 
 std::vector<double> model_mm(const Network& net, const Model& m, const std::vector<double>& x0, int iters,
                              std::vector<double>* phi) {
-  const ModelMMRef r(net, m);
-  std::vector<double> x = x0, y = r.best_y(x0);
-  if (phi) phi->assign(1, r.Phi(x, y));
-  for (int t = 0; t < iters; ++t) {
-    r.step(x, y);
-    if (phi) phi->push_back(r.Phi(x, y));
-  }
-  return x;
+  return plain_mm(ModelMMRef(net, m), x0, iters, phi);
 }
 
 std::vector<double> model_mm_accel(const Network& net, const Model& m, const std::vector<double>& x0, int iters,
