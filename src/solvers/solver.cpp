@@ -198,6 +198,7 @@ class Solver::Run {
     std::int64_t k = 0;         // iterations done in this phase
     std::int64_t cap = 0;       // iterations this phase may run (SolverOptions::phase_max_iter)
     std::int64_t every = 1;     // record interval (the grown schedule: the grid records fall on)
+    int requested_block = 1;    // iterations per pass asked for (phase_block)
     std::int64_t block = 1;     // iterations per pass at most
     std::int64_t stop_every = 1;  // --stop gradient: the test's (first) interval, a multiple of every
     // The grown schedule (large networks, automatic intervals): the test's
@@ -230,6 +231,7 @@ class Solver::Run {
   bool bounded_test_allowed(const Phase& ph) const;
   void start_phase(Phase& ph);
   void set_pass_sizes(Phase& ph) const;
+  int phase_block(const Phase& ph) const;
   bool gradient_rule() const { return opt_.stop == "gradient" && opt_.stop_tol() > 0; }
   bool pass(Phase& ph);  // false: the phase ends
   std::int64_t pass_length(const Phase& ph) const;
@@ -346,7 +348,9 @@ void Solver::Run::run_phases() {
 }
 
 void Solver::Run::start_phase(Phase& ph) {
-  ph.alg = make_algorithm(phases_[ph.index], prob_, opt_);
+  SolverOptions po = opt_;
+  po.temporal_block = ph.requested_block = phase_block(ph);
+  ph.alg = make_algorithm(phases_[ph.index], prob_, po);
   ph.alg->start(x_);
   long long b = ph.alg->memory_bytes(), all = 0;
   MPI_Allreduce(&b, &all, 1, MPI_LONG_LONG, MPI_SUM, comm_);
@@ -393,6 +397,25 @@ double gradient_test_cost(AlgorithmId id) {
   }
 }
 
+// Iterations per pass that phase ph asks for (collective): --temporal-block,
+// except in dv-pipeline's smoothing relaxation on large networks whose lane
+// arrays outgrow the cache (the mean rank's, 12 bytes a slot, beyond
+// stream_rows' 16 MiB), which runs kSmoothBlock per pass: the same iterates,
+// bit for bit, for less memory traffic (where the arrays stay in cache a
+// pass gains nothing). That phase runs its iterations without a stopping
+// test, and 5 divides the large networks' record intervals (10, 50, 100): its
+// records fall where they would without. SNL_TEST_SMOOTH_BLOCK=1: tests
+// take the blocked path on small arrays too.
+constexpr int kSmoothBlock = 5;
+int Solver::Run::phase_block(const Phase& ph) const {
+  const bool smoothing = opt_.algorithm == "dv-pipeline" && ph.index == 0 && phases_.size() > 1;
+  if (!smoothing || prob_.num_sensors() < kLargeNetwork) return opt_.temporal_block;
+  long long slots = static_cast<long long>(prob_.graph().adjacency().size()), all = 0;
+  MPI_Allreduce(&slots, &all, 1, MPI_LONG_LONG, MPI_SUM, comm_);
+  const bool forced = std::getenv("SNL_TEST_SMOOTH_BLOCK") != nullptr;
+  return forced || detail::stream_rows(std::size_t(12 * all / comm_size(comm_))) ? kSmoothBlock : opt_.temporal_block;
+}
+
 void Solver::Run::set_pass_sizes(Phase& ph) const {
   // Auto: every iteration for small runs; about 1000 records per phase for
   // long ones; at least every 10 iterations on large networks, where a record
@@ -406,7 +429,7 @@ void Solver::Run::set_pass_sizes(Phase& ph) const {
   // Temporal blocking: passes of up to `block` iterations, ending at every
   // record and checkpoint iteration (so these see the same iterates); the
   // automatic record interval becomes a multiple of the pass.
-  ph.block = std::max(1, std::min(opt_.temporal_block, ph.alg->max_levels()));
+  ph.block = std::max(1, std::min(ph.requested_block, ph.alg->max_levels()));
   if (ph.alg->free_running()) {
     // One pass to the end of the phase (no synchronisation between its
     // iterations), cut only by explicit records (--history-every) and checkpoints.

@@ -209,3 +209,41 @@ TEST(DvPipeline, NeverAboveThePapersPipeline) {
       EXPECT_LE(dv, papers * (1 + 1e-9)) << f << " --weights " << weights;
     }
 }
+
+// On large networks dv-pipeline runs its smoothing relaxation in passes of
+// several iterations (temporal blocking, solver.cpp: phase_block; forced here
+// on a small one by SNL_TEST_SMOOTH_BLOCK): its phases must still end on the
+// bits of the three methods run one after the other from the same start, one
+// iteration per pass.
+TEST(DvPipeline, SameBitsAsItsPhasesRunOneByOne) {
+  GenerateOptions g;
+  g.sensors = 10000;
+  g.seed = 4;
+  g.localizable = GenerateOptions::Localizable::kNo;
+  const Network w = generate_network(g);
+  LocalizationProblem prob(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kMetis, nullptr);
+  ASSERT_GE(prob.num_sensors(), 10000);
+  auto options = [](const char* alg, std::int64_t iters) {
+    SolverOptions o;
+    o.algorithm = alg;
+    o.max_iter = iters;
+    o.tol = 0;
+    o.history_every = 1000000;
+    return o;
+  };
+  const std::vector<double> x0 = dv_initial_positions(prob, 1, nullptr);
+  std::vector<double> whole, x = x0;
+  setenv("SNL_TEST_SMOOTH_BLOCK", "1", 1);
+  Solver(prob, options("dv-pipeline", 60)).solve(x0, &whole);
+  unsetenv("SNL_TEST_SMOOTH_BLOCK");
+  // smoothing (--smooth-iter 200, capped at 60), settling (likewise), ml-agd
+  for (const char* alg : {"relaxation", "mm-accel", "ml-agd"}) {
+    std::vector<double> next;
+    Solver(prob, options(alg, 60)).solve(x, &next);
+    x = next;
+  }
+  const auto a = test::allgather_positions(prob, whole), b = test::allgather_positions(prob, x);
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(0, std::memcmp(a.data(), b.data(), a.size() * sizeof(double)));
+  EXPECT_NE(0, std::memcmp(a.data(), test::allgather_positions(prob, x0).data(), a.size() * sizeof(double)));
+}
