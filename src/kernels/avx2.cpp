@@ -109,10 +109,13 @@ SNL_AVX2 void relax_chunks_avx2(const LocalizationProblem& prob, const NodeLanes
       const __m256d cf = _mm256_sub_pd(one, _mm256_div_pd(r, nz));
       for (int k = 0; k < P; ++k) A[k] = _mm256_add_pd(A[k], _mm256_and_pd(_mm256_mul_pd(cf, z[k]), mask));
     }
-    if (nl.has_anchor[c]) {  // rare at scale: through memory, one node at a time
+    if (nl.has_anchor[c]) {  // through memory, the nodes with anchors alone
       alignas(32) double tmp[4 * P];
       store_own<P>(tmp, A, false);
-      for (int q = 0; q < 4; ++q) add_anchor_disk_terms(prob, v0 + q, s.w + i0 + P * q, tmp + P * q, s.ml);
+      for (unsigned m = nl.has_anchor[c]; m; m &= m - 1) {
+        const int q = __builtin_ctz(m);
+        add_anchor_disk_terms(prob, v0 + q, s.w + i0 + P * q, tmp + P * q, s.ml);
+      }
       load_own<P>(tmp, A);
     }
     __m256d X[P], N[P], D[P], WN[P];
@@ -229,7 +232,10 @@ SNL_AVX2 void mm_chunks_avx2(const LocalizationProblem& prob, const NodeLanes& n
         store_own<P>(own, V, false);
         xo = own;
       }
-      for (int q = 0; q < 4; ++q) add_anchor_mm_terms<P>(prob, v0 + q, xo + P * q, s.keep, s.invL, s.aw, tmp + P * q);
+      for (unsigned m = nl.has_anchor[c]; m; m &= m - 1) {
+        const int q = __builtin_ctz(m);
+        add_anchor_mm_terms<P>(prob, v0 + q, xo + P * q, s.keep, s.invL, s.aw, tmp + P * q);
+      }
       load_own<P>(tmp, A);
     }
     __m256d X[P], D[P];

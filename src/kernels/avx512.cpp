@@ -135,7 +135,10 @@ SNL_AVX512 void relax_chunks_avx512(const LocalizationProblem& prob, const NodeL
     if (nl.has_anchor[c]) {
       alignas(64) double tmp[8 * P];
       store_own8<P>(tmp, A, false);
-      for (int q = 0; q < 8; ++q) add_anchor_disk_terms(prob, v0 + q, s.w + i0 + P * q, tmp + P * q, s.ml);
+      for (unsigned m = nl.has_anchor[c]; m; m &= m - 1) {
+        const int q = __builtin_ctz(m);
+        add_anchor_disk_terms(prob, v0 + q, s.w + i0 + P * q, tmp + P * q, s.ml);
+      }
       load_own8<P>(tmp, A);
     }
     __m512d X[P], N[P], D[P], WN[P];
@@ -241,7 +244,10 @@ SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& prob, const NodeLane
         store_own8<P>(own, V, false);
         xo = own;
       }
-      for (int q = 0; q < 8; ++q) add_anchor_mm_terms<P>(prob, v0 + q, xo + P * q, s.keep, s.invL, s.aw, tmp + P * q);
+      for (unsigned m = nl.has_anchor[c]; m; m &= m - 1) {
+        const int q = __builtin_ctz(m);
+        add_anchor_mm_terms<P>(prob, v0 + q, xo + P * q, s.keep, s.invL, s.aw, tmp + P * q);
+      }
       load_own8<P>(tmp, A);
     }
     __m512d X[P], D[P];

@@ -78,7 +78,9 @@ struct NodeLanes {
   std::int64_t split = 0;                 ///< chunks [0, split) interior, [split, size) boundary
   std::vector<LocalId> first;             ///< chunk c: nodes [first[c], first[c] + count[c])
   std::vector<std::uint8_t> count;
-  std::vector<std::uint8_t> has_anchor;   ///< some node of the chunk has anchor ranges
+  /// Bit q: node first[c] + q has anchor ranges (the kernels visit those
+  /// nodes alone: most chunks at scale have one or two).
+  std::vector<std::uint8_t> has_anchor;
   std::vector<std::int64_t> group_off;    ///< chunk c: groups [group_off[c], group_off[c + 1])
   std::vector<LocalId> adj;               ///< lanes per group; entry q: neighbour of node first[c] + q
   std::vector<double> rho;                ///< lanes per group, in register lane order (lane_node)

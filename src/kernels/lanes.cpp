@@ -52,7 +52,7 @@ void NodeLanes::build(const LocalizationProblem& prob) {
     group_off[c + 1] = g0 + width;
     for (int q = 0; q < cnt; ++q) {
       const LocalId v = v0 + q;
-      has_anchor[c] |= aoff[v] != aoff[v + 1];
+      if (aoff[v] != aoff[v + 1]) has_anchor[c] |= std::uint8_t(1u << q);
       for (std::int64_t g = 0; g < width; ++g) {
         const std::size_t at = std::size_t(g0 + g) * C;
         const int L = NodeLanes::lane_of_node(q, C);
