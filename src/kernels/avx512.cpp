@@ -106,7 +106,7 @@ SNL_AVX512 inline __m512d square_sum8(const __m512d* U, int P) {
 }
 
 template <int P>
-SNL_AVX512 void relax_chunks_avx512(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0,
+SNL_AVX512 void relax_chunks_avx512(const LocalizationProblem& /*prob: the layout holds the anchors*/, const NodeLanes& nl, std::int64_t c0,
                                     std::int64_t c1, const RelaxStep& s) {
   const __m512d one = _mm512_set1_pd(1.0), vL = _mm512_set1_pd(s.L), vb = _mm512_set1_pd(s.beta);
   __m512d DD = load_lanes8(s.norms), SS = load_lanes8(s.norms + 8), GS = load_lanes8(s.norms + 16);
@@ -132,13 +132,10 @@ SNL_AVX512 void relax_chunks_avx512(const LocalizationProblem& prob, const NodeL
       const __m512d cf = _mm512_sub_pd(one, _mm512_div_pd(r, nz));
       for (int k = 0; k < P; ++k) A[k] = _mm512_mask_add_pd(A[k], out, A[k], _mm512_mul_pd(cf, z[k]));
     }
-    if (nl.has_anchor[c]) {
+    if (nl.anchor_off[c] != nl.anchor_off[c + 1]) {
       alignas(64) double tmp[8 * P];
       store_own8<P>(tmp, A, false);
-      for (unsigned m = nl.has_anchor[c]; m; m &= m - 1) {
-        const int q = __builtin_ctz(m);
-        add_anchor_disk_terms(prob, v0 + q, s.w + i0 + P * q, tmp + P * q, s.ml);
-      }
+      add_chunk_anchor_disk_terms<P>(nl, c, s.w + i0, tmp, s.ml);
       load_own8<P>(tmp, A);
     }
     __m512d X[P], N[P], D[P], WN[P];
@@ -175,7 +172,7 @@ SNL_AVX512 void relax_chunks_avx512(const LocalizationProblem& prob, const NodeL
 // Extrap: mm-accel's extrapolated edge variables ya + beta (ya - yb), formed
 // on the fly, the result stored to y (as mm_chunks_avx2).
 template <int P, bool Extrap = false>
-SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0,
+SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& /*prob*/, const NodeLanes& nl, std::int64_t c0,
                                  std::int64_t c1, const MMStep& s) {
   const __m512d minus_one = _mm512_set1_pd(-1.0), zero = _mm512_setzero_pd();
   const __m512d vkeep = _mm512_set1_pd(s.keep), vinvL = _mm512_set1_pd(s.invL), vbeta = _mm512_set1_pd(s.beta);
@@ -236,7 +233,7 @@ SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& prob, const NodeLane
           _mm512_storeu_pd(yg + 8 * k, Yn);
       }
     }
-    if (nl.has_anchor[c]) {
+    if (nl.anchor_off[c] != nl.anchor_off[c + 1]) {
       alignas(64) double tmp[8 * P], own[8 * P];
       store_own8<P>(tmp, A, false);
       const double* xo = s.x + i0;
@@ -244,10 +241,7 @@ SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& prob, const NodeLane
         store_own8<P>(own, V, false);
         xo = own;
       }
-      for (unsigned m = nl.has_anchor[c]; m; m &= m - 1) {
-        const int q = __builtin_ctz(m);
-        add_anchor_mm_terms<P>(prob, v0 + q, xo + P * q, s.keep, s.invL, s.aw, tmp + P * q);
-      }
+      add_chunk_anchor_mm_terms<P>(nl, c, xo, s.keep, s.invL, s.aw, tmp);
       load_own8<P>(tmp, A);
     }
     __m512d X[P], D[P];

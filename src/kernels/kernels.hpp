@@ -78,15 +78,19 @@ struct NodeLanes {
   std::int64_t split = 0;                 ///< chunks [0, split) interior, [split, size) boundary
   std::vector<LocalId> first;             ///< chunk c: nodes [first[c], first[c] + count[c])
   std::vector<std::uint8_t> count;
-  /// Bit q: node first[c] + q has anchor ranges (the kernels visit those
-  /// nodes alone: most chunks at scale have one or two).
-  std::vector<std::uint8_t> has_anchor;
   std::vector<std::int64_t> group_off;    ///< chunk c: groups [group_off[c], group_off[c + 1])
   std::vector<LocalId> adj;               ///< lanes per group; entry q: neighbour of node first[c] + q
   std::vector<double> rho;                ///< lanes per group, in register lane order (lane_node)
   /// Per group, bit L for register lane L: the slot is real (not padding);
   /// the slot's edge is (owner, neighbour) in global-id order (MM's orientation).
   std::vector<std::uint8_t> real, fwd;
+  /// The owned nodes' anchor pairs in anchor-CSR order (chunk c's are
+  /// [anchor_off[c], anchor_off[c + 1]): the chunks hold consecutive nodes),
+  /// copied here so that the kernels read them in sequence: the anchor's
+  /// position (p doubles), the range, and the node's offset in its chunk.
+  std::vector<std::int64_t> anchor_off;
+  std::vector<double> anchor_pos, anchor_rho;
+  std::vector<std::uint8_t> anchor_q;
   LocalId n_interior = 0;
   /// Node offset held by register lane L after the pairwise unpack of row
   /// loads: (0, C/2, 1, C/2 + 1, ...); lane_of_node is its inverse.

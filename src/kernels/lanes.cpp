@@ -5,9 +5,12 @@
 namespace snl::detail {
 
 std::int64_t NodeLanes::bytes() const {
-  return static_cast<std::int64_t>(first.capacity() * sizeof(LocalId) + count.capacity() + has_anchor.capacity() +
+  return static_cast<std::int64_t>(first.capacity() * sizeof(LocalId) + count.capacity() +
                                    group_off.capacity() * sizeof(std::int64_t) + adj.capacity() * sizeof(LocalId) +
-                                   rho.capacity() * sizeof(double) + real.capacity() + fwd.capacity());
+                                   rho.capacity() * sizeof(double) + real.capacity() + fwd.capacity() +
+                                   anchor_off.capacity() * sizeof(std::int64_t) +
+                                   (anchor_pos.capacity() + anchor_rho.capacity()) * sizeof(double) +
+                                   anchor_q.capacity());
 }
 
 void NodeLanes::build(const LocalizationProblem& prob) {
@@ -37,7 +40,6 @@ void NodeLanes::build(const LocalizationProblem& prob) {
   });
   first.assign(std::size_t(chunks), 0);
   count.assign(std::size_t(chunks), 0);
-  has_anchor.assign(std::size_t(chunks), 0);
   group_off.assign(std::size_t(chunks) + 1, 0);
   adj.assign(std::size_t(groups) * C, 0);
   rho.assign(std::size_t(groups) * C, 1.0);
@@ -52,7 +54,6 @@ void NodeLanes::build(const LocalizationProblem& prob) {
     group_off[c + 1] = g0 + width;
     for (int q = 0; q < cnt; ++q) {
       const LocalId v = v0 + q;
-      if (aoff[v] != aoff[v + 1]) has_anchor[c] |= std::uint8_t(1u << q);
       for (std::int64_t g = 0; g < width; ++g) {
         const std::size_t at = std::size_t(g0 + g) * C;
         const int L = NodeLanes::lane_of_node(q, C);
@@ -69,6 +70,23 @@ void NodeLanes::build(const LocalizationProblem& prob) {
     }
     ++c;
   });
+  // The anchor pairs, in CSR order: the chunks cover the owned nodes in order.
+  const int p = prob.dim();
+  const auto& aid = prob.anchor_ids();
+  const std::int64_t pairs = aoff[n_owned];
+  anchor_off.assign(std::size_t(chunks) + 1, pairs);
+  anchor_pos.resize(std::size_t(pairs) * p);
+  anchor_rho.assign(prob.anchor_ranges().begin(), prob.anchor_ranges().begin() + pairs);
+  anchor_q.resize(std::size_t(pairs));
+  for (std::int64_t ch = 0; ch < chunks; ++ch) {
+    anchor_off[std::size_t(ch)] = aoff[first[ch]];
+    for (int q = 0; q < count[ch]; ++q)
+      for (auto e = aoff[first[ch] + q]; e < aoff[first[ch] + q + 1]; ++e) {
+        anchor_q[std::size_t(e)] = static_cast<std::uint8_t>(q);
+        for (int k = 0; k < p; ++k)
+          anchor_pos[std::size_t(e) * p + k] = prob.anchors()[std::size_t(aid[e]) * p + k];
+      }
+  }
 }
 
 std::shared_ptr<const NodeLanes> shared_lanes(const LocalizationProblem& prob) {
