@@ -83,7 +83,7 @@ SNL_AVX2 inline __m256d square_sum(const __m256d* U, int P) {
 
 // Node-lane relaxation step, 4 nodes per register (full chunks only).
 template <int P>
-SNL_AVX2 void relax_chunks_avx2(const LocalizationProblem& /*prob: the layout holds the anchors*/, const NodeLanes& nl, std::int64_t c0,
+SNL_AVX2 void relax_chunks_avx2(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0,
                                 std::int64_t c1, const RelaxStep& s) {
   const __m256d one = _mm256_set1_pd(1.0), vL = _mm256_set1_pd(s.L), vb = _mm256_set1_pd(s.beta);
   __m256d DD = load_scalars_0213(s.norms), SS = load_scalars_0213(s.norms + 4), GS = load_scalars_0213(s.norms + 8);
@@ -112,7 +112,7 @@ SNL_AVX2 void relax_chunks_avx2(const LocalizationProblem& /*prob: the layout ho
     if (nl.anchor_off[c] != nl.anchor_off[c + 1]) {  // through memory, the nodes with anchors alone
       alignas(32) double tmp[4 * P];
       store_own<P>(tmp, A, false);
-      add_chunk_anchor_disk_terms<P>(nl, c, s.w + i0, tmp, s.ml);
+      add_chunk_anchor_disk_terms<P>(prob, nl, c, s.w + i0, tmp, s.ml);
       load_own<P>(tmp, A);
     }
     __m256d X[P], N[P], D[P], WN[P];
@@ -125,6 +125,7 @@ SNL_AVX2 void relax_chunks_avx2(const LocalizationProblem& /*prob: the layout ho
     }
     store_own<P>(s.xn + i0, N, s.stream);
     store_own<P>(s.wn + i0, WN, s.stream);
+    if (s.g) store_own<P>(s.g + i0, A, false);
     for (int k = 0; k < P; ++k) DD = _mm256_add_pd(DD, _mm256_mul_pd(D[k], D[k]));
     for (int k = 0; k < P; ++k) SS = _mm256_add_pd(SS, _mm256_mul_pd(N[k], N[k]));
     for (int k = 0; k < P; ++k) GS = _mm256_add_pd(GS, _mm256_mul_pd(A[k], A[k]));
@@ -157,7 +158,7 @@ SNL_AVX2 inline __m256d lane_mask4(unsigned bits) {
 // variables are mm-accel's extrapolated point ya + beta (ya - yb), formed
 // on the fly (MMStep::ya), the result stored to y.
 template <int P, bool Extrap = false>
-SNL_AVX2 void mm_chunks_avx2(const LocalizationProblem& /*prob*/, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
+SNL_AVX2 void mm_chunks_avx2(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
                              const MMStep& s) {
   const __m256d one = _mm256_set1_pd(1.0), minus_one = _mm256_set1_pd(-1.0), zero = _mm256_setzero_pd();
   const __m256d vkeep = _mm256_set1_pd(s.keep), vinvL = _mm256_set1_pd(s.invL), vbeta = _mm256_set1_pd(s.beta);
@@ -229,7 +230,7 @@ SNL_AVX2 void mm_chunks_avx2(const LocalizationProblem& /*prob*/, const NodeLane
         store_own<P>(own, V, false);
         xo = own;
       }
-      add_chunk_anchor_mm_terms<P>(nl, c, xo, s.keep, s.invL, s.aw, tmp);
+      add_chunk_anchor_mm_terms<P>(prob, nl, c, xo, s.keep, s.invL, s.aw, tmp);
       load_own<P>(tmp, A);
     }
     __m256d X[P], D[P];

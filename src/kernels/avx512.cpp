@@ -106,7 +106,7 @@ SNL_AVX512 inline __m512d square_sum8(const __m512d* U, int P) {
 }
 
 template <int P>
-SNL_AVX512 void relax_chunks_avx512(const LocalizationProblem& /*prob: the layout holds the anchors*/, const NodeLanes& nl, std::int64_t c0,
+SNL_AVX512 void relax_chunks_avx512(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0,
                                     std::int64_t c1, const RelaxStep& s) {
   const __m512d one = _mm512_set1_pd(1.0), vL = _mm512_set1_pd(s.L), vb = _mm512_set1_pd(s.beta);
   __m512d DD = load_lanes8(s.norms), SS = load_lanes8(s.norms + 8), GS = load_lanes8(s.norms + 16);
@@ -135,7 +135,7 @@ SNL_AVX512 void relax_chunks_avx512(const LocalizationProblem& /*prob: the layou
     if (nl.anchor_off[c] != nl.anchor_off[c + 1]) {
       alignas(64) double tmp[8 * P];
       store_own8<P>(tmp, A, false);
-      add_chunk_anchor_disk_terms<P>(nl, c, s.w + i0, tmp, s.ml);
+      add_chunk_anchor_disk_terms<P>(prob, nl, c, s.w + i0, tmp, s.ml);
       load_own8<P>(tmp, A);
     }
     __m512d X[P], N[P], D[P], WN[P];
@@ -148,6 +148,7 @@ SNL_AVX512 void relax_chunks_avx512(const LocalizationProblem& /*prob: the layou
     }
     store_own8<P>(s.xn + i0, N, s.stream);
     store_own8<P>(s.wn + i0, WN, s.stream);
+    if (s.g) store_own8<P>(s.g + i0, A, false);
     for (int k = 0; k < P; ++k) DD = _mm512_add_pd(DD, _mm512_mul_pd(D[k], D[k]));
     for (int k = 0; k < P; ++k) SS = _mm512_add_pd(SS, _mm512_mul_pd(N[k], N[k]));
     for (int k = 0; k < P; ++k) GS = _mm512_add_pd(GS, _mm512_mul_pd(A[k], A[k]));
@@ -172,7 +173,7 @@ SNL_AVX512 void relax_chunks_avx512(const LocalizationProblem& /*prob: the layou
 // Extrap: mm-accel's extrapolated edge variables ya + beta (ya - yb), formed
 // on the fly, the result stored to y (as mm_chunks_avx2).
 template <int P, bool Extrap = false>
-SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& /*prob*/, const NodeLanes& nl, std::int64_t c0,
+SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0,
                                  std::int64_t c1, const MMStep& s) {
   const __m512d minus_one = _mm512_set1_pd(-1.0), zero = _mm512_setzero_pd();
   const __m512d vkeep = _mm512_set1_pd(s.keep), vinvL = _mm512_set1_pd(s.invL), vbeta = _mm512_set1_pd(s.beta);
@@ -241,7 +242,7 @@ SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& /*prob*/, const Node
         store_own8<P>(own, V, false);
         xo = own;
       }
-      add_chunk_anchor_mm_terms<P>(nl, c, xo, s.keep, s.invL, s.aw, tmp);
+      add_chunk_anchor_mm_terms<P>(prob, nl, c, xo, s.keep, s.invL, s.aw, tmp);
       load_own8<P>(tmp, A);
     }
     __m512d X[P], D[P];

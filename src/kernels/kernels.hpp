@@ -84,12 +84,11 @@ struct NodeLanes {
   /// Per group, bit L for register lane L: the slot is real (not padding);
   /// the slot's edge is (owner, neighbour) in global-id order (MM's orientation).
   std::vector<std::uint8_t> real, fwd;
-  /// The owned nodes' anchor pairs in anchor-CSR order (chunk c's are
-  /// [anchor_off[c], anchor_off[c + 1]): the chunks hold consecutive nodes),
-  /// copied here so that the kernels read them in sequence: the anchor's
-  /// position (p doubles), the range, and the node's offset in its chunk.
+  /// Chunk c's anchor pairs are [anchor_off[c], anchor_off[c + 1]) of the
+  /// problem's anchor CSR (the chunks hold consecutive nodes); anchor_q: per
+  /// pair, its node's offset in the chunk. The kernels read them in sequence
+  /// instead of the anchor offsets of every node.
   std::vector<std::int64_t> anchor_off;
-  std::vector<double> anchor_pos, anchor_rho;
   std::vector<std::uint8_t> anchor_q;
   LocalId n_interior = 0;
   /// Node offset held by register lane L after the pairwise unpack of row
@@ -216,6 +215,9 @@ struct RelaxStep {
   /// restart[0 .. C) and their absolute values into restart[C .. 2C), in no
   /// fixed order (relaxation.cpp bounds the rounding).
   double* restart = nullptr;
+  /// Where set, the gradient g per owned node is stored here too, after xn
+  /// and wn (the same array as both is allowed: g is what it then holds).
+  double* g = nullptr;
 };
 void relax_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
                   const RelaxStep& s);

@@ -8,9 +8,7 @@ std::int64_t NodeLanes::bytes() const {
   return static_cast<std::int64_t>(first.capacity() * sizeof(LocalId) + count.capacity() +
                                    group_off.capacity() * sizeof(std::int64_t) + adj.capacity() * sizeof(LocalId) +
                                    rho.capacity() * sizeof(double) + real.capacity() + fwd.capacity() +
-                                   anchor_off.capacity() * sizeof(std::int64_t) +
-                                   (anchor_pos.capacity() + anchor_rho.capacity()) * sizeof(double) +
-                                   anchor_q.capacity());
+                                   anchor_off.capacity() * sizeof(std::int64_t) + anchor_q.capacity());
 }
 
 void NodeLanes::build(const LocalizationProblem& prob) {
@@ -71,21 +69,12 @@ void NodeLanes::build(const LocalizationProblem& prob) {
     ++c;
   });
   // The anchor pairs, in CSR order: the chunks cover the owned nodes in order.
-  const int p = prob.dim();
-  const auto& aid = prob.anchor_ids();
-  const std::int64_t pairs = aoff[n_owned];
-  anchor_off.assign(std::size_t(chunks) + 1, pairs);
-  anchor_pos.resize(std::size_t(pairs) * p);
-  anchor_rho.assign(prob.anchor_ranges().begin(), prob.anchor_ranges().begin() + pairs);
-  anchor_q.resize(std::size_t(pairs));
+  anchor_off.assign(std::size_t(chunks) + 1, aoff[n_owned]);
+  anchor_q.resize(std::size_t(aoff[n_owned]));
   for (std::int64_t ch = 0; ch < chunks; ++ch) {
     anchor_off[std::size_t(ch)] = aoff[first[ch]];
     for (int q = 0; q < count[ch]; ++q)
-      for (auto e = aoff[first[ch] + q]; e < aoff[first[ch] + q + 1]; ++e) {
-        anchor_q[std::size_t(e)] = static_cast<std::uint8_t>(q);
-        for (int k = 0; k < p; ++k)
-          anchor_pos[std::size_t(e) * p + k] = prob.anchors()[std::size_t(aid[e]) * p + k];
-      }
+      for (auto e = aoff[first[ch] + q]; e < aoff[first[ch] + q + 1]; ++e) anchor_q[std::size_t(e)] = std::uint8_t(q);
   }
 }
 

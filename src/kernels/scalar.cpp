@@ -36,6 +36,7 @@ void relax_chunk_scalar(const LocalizationProblem& prob, const NodeLanes& nl, st
       rt += (s.w[i0 + k] - now) * d;
       s.xn[i0 + k] = now;
       s.wn[i0 + k] = now + s.beta * d;
+      if (s.g) s.g[i0 + k] = acc[k];
       s.norms[q] += d * d;
       s.norms[C + q] += now * now;
       s.norms[2 * C + q] += acc[k] * acc[k];

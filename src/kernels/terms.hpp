@@ -75,34 +75,41 @@ __attribute__((noinline)) void add_anchor_mm_terms(const LocalizationProblem& pr
   }
 }
 
-// add_anchor_disk_terms for every node of chunk c with anchor ranges, from
-// the layout's copies of its anchor pairs (read in sequence): acc and x hold
-// the chunk's rows (P per node offset); per node its anchors in CSR order,
-// the same arithmetic, so the same bits.
+// add_anchor_disk_terms for every node of chunk c with anchor ranges, its
+// pairs read in sequence (NodeLanes::anchor_off): acc and x hold the chunk's
+// rows (P per node offset); per node its anchors in CSR order, the same
+// arithmetic, so the same bits.
 template <int P>
-__attribute__((noinline)) void add_chunk_anchor_disk_terms(const NodeLanes& nl, std::int64_t c, const double* x,
-                                                           double* acc, bool ml) {
+__attribute__((noinline)) void add_chunk_anchor_disk_terms(const LocalizationProblem& prob, const NodeLanes& nl,
+                                                           std::int64_t c, const double* x, double* acc, bool ml) {
+  const auto* aid = prob.anchor_ids().data();
+  const double* ar = prob.anchor_ranges().data();
+  const double* anc = prob.anchors().data();
   double t[P];
   for (auto e = nl.anchor_off[c]; e < nl.anchor_off[c + 1]; ++e) {
     const int q = nl.anchor_q[e];
-    disk_term<P>(x + P * q, &nl.anchor_pos[std::size_t(e) * P], nl.anchor_rho[e], t, ml);
+    disk_term<P>(x + P * q, anc + std::size_t(aid[e]) * P, ar[e], t, ml);
     for (int k = 0; k < P; ++k) acc[P * q + k] += t[k];
   }
 }
 
 // add_anchor_mm_terms for every node of chunk c with anchor ranges, likewise.
 template <int P>
-__attribute__((noinline)) void add_chunk_anchor_mm_terms(const NodeLanes& nl, std::int64_t c, const double* x,
-                                                         double keep, double invL, double* aw, double* acc) {
+__attribute__((noinline)) void add_chunk_anchor_mm_terms(const LocalizationProblem& prob, const NodeLanes& nl,
+                                                         std::int64_t c, const double* x, double keep, double invL,
+                                                         double* aw, double* acc) {
+  const auto* aid = prob.anchor_ids().data();
+  const double* ar = prob.anchor_ranges().data();
+  const double* anc = prob.anchors().data();
   for (auto e = nl.anchor_off[c]; e < nl.anchor_off[c + 1]; ++e) {
     const int q = nl.anchor_q[e];
-    const double* a = &nl.anchor_pos[std::size_t(e) * P];
+    const double* a = anc + std::size_t(aid[e]) * P;
     double* w = aw + std::size_t(e) * P;
     double dz[P];
     for (int k = 0; k < P; ++k) dz[k] = x[P * q + k] - a[k];
     for (int k = 0; k < P; ++k) acc[P * q + k] += dz[k] - w[k];
     for (int k = 0; k < P; ++k) w[k] = keep * w[k] + invL * dz[k];
-    project_sphere<P>(nl.anchor_rho[e], w);
+    project_sphere<P>(ar[e], w);
   }
 }
 

@@ -22,6 +22,7 @@
 
 #include "core/exact_sum.hpp"
 #include "kernels/kernels.hpp"
+#include "solvers/lane_costs.hpp"
 #include "snl/problem/metrics.hpp"
 #include "solvers/algorithm_util.hpp"
 #include "solvers/methods.hpp"
@@ -136,7 +137,8 @@ class Relaxation final : public Algorithm {
   }
   double objective() override {
     prob_.graph().halo().exchange(x_.data(), prob_.dim());
-    return ml_ ? evaluate_ml_cost(prob_, x_.data()) : evaluate_relaxed_cost(prob_, x_.data());
+    return ml_ ? detail::exact_costs(prob_, x_.data(), detail::kMlSum).ml
+               : detail::exact_costs(prob_, x_.data(), detail::kRelaxedSum).relaxed;
   }
   bool objective_is_ml_cost() const override { return ml_; }
   void change_norms(double* d, double* s) const override {

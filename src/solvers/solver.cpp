@@ -15,6 +15,7 @@
 
 #include "core/exact_sum.hpp"
 #include "solvers/gradient_test.hpp"
+#include "solvers/lane_costs.hpp"
 #include "snl/core/memory.hpp"
 #include "snl/core/mpi_util.hpp"
 
@@ -668,7 +669,7 @@ double Solver::Run::relative_gradient(Phase& ph) {
       return b.lo;
     }
   }
-  xs_ml_ = ml_cost_and_gradient(prob_, xs_.data(), gs_.data(), relaxed);
+  xs_ml_ = detail::exact_ml_cost_and_gradient(prob_, xs_.data(), gs_.data(), relaxed);
   xs_iteration_ = total_it_;
   detail::ExactSum g;
   for (LocalId v = 0; v < n; ++v) {
@@ -804,7 +805,7 @@ void Solver::Run::end_phase(Phase& ph) {
     const std::int64_t b1 = halo_.bytes_sent();
     halo_.exchange(xs_.data(), p_);
     instrumentation_bytes_ += halo_.bytes_sent() - b1;
-    const CostTerms c = evaluate_costs(prob_, xs_.data());
+    const CostTerms c = detail::exact_costs(prob_, xs_.data(), detail::kAllSums);
     sum_.gap_certificate = c.certificate;
     sum_.relaxed_optimum = c.relaxed;
   }
@@ -824,7 +825,7 @@ Summary Solver::Run::finish(std::vector<double>* x_out) {
   std::copy(x_.begin(), x_.end(), xs_.begin());
   const std::int64_t b0 = halo_.bytes_sent();
   halo_.exchange(xs_.data(), p_);
-  sum_.costs = evaluate_costs(prob_, xs_.data());
+  sum_.costs = detail::exact_costs(prob_, xs_.data(), detail::kAllSums);
   sum_.errors = evaluate_errors(prob_, xs_.data());
   instrumentation_bytes_ += halo_.bytes_sent() - b0;
   sum_.messages_per_sensor = messages_;
@@ -853,7 +854,7 @@ void Solver::Run::metrics_at(const std::vector<double>& x, IterationSummary& it)
   } else {
     std::copy(x.begin(), x.begin() + std::size_t(prob_.num_owned()) * p_, xs_.begin());
     halo_.exchange(xs_.data(), p_);
-    it.ml_cost = evaluate_ml_cost(prob_, xs_.data());
+    it.ml_cost = detail::exact_costs(prob_, xs_.data(), detail::kMlSum).ml;
   }
   const ErrorMetrics em = evaluate_errors(prob_, xs_.data());
   it.rmse = em.rmse;

@@ -17,6 +17,7 @@
 #include "snl/problem/metrics.hpp"
 #include "solve_helpers.hpp"
 #include "solvers/gradient_test.hpp"
+#include "solvers/lane_costs.hpp"
 
 using namespace snl;
 using snl::test::make_network;
@@ -106,6 +107,52 @@ TEST(GradientTest, BoundsHoldTheExactRelativeGradient) {
     }
   }
   EXPECT_EQ(cases, 36);
+}
+
+// The exact costs and the exact test from the lane layout (lane_costs.hpp,
+// what the Solver and the relaxation run once a phase built the layout)
+// against metrics.cpp's scalar passes: the same f, f_hat, certificate and
+// a-priori bound, and the same gradient, bit for bit; 2D and 3D, at random
+// starts, near the truth and with sensors on top of each other (|z| = 0).
+TEST(LaneCosts, AreTheScalarPassesBits) {
+  int cases = 0;
+  for (std::uint64_t seed = 1; seed <= 6; ++seed) {
+    const int dim = seed % 3 == 0 ? 3 : 2;
+    const Network w = make_network({.n = GlobalId(150 + 40 * seed), .dim = dim, .radius = dim == 3 ? 0.4 : 0.25,
+                                    .anchor_radius = 0.3, .sigma = 0.01 * double(seed % 3), .seed = seed});
+    LocalizationProblem prob(MPI_COMM_WORLD, slab_of(w, MPI_COMM_WORLD), PartitionMethod::kMetis, nullptr);
+    const int p = prob.dim();
+    const std::size_t n = std::size_t(prob.num_owned()) * p;
+    std::vector<double> start = random_initial_positions(prob, seed), near(n), stacked(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      near[i] = prob.truth()[i] + 1e-3 * std::sin(double(i) + seed);
+      stacked[i] = std::floor(4.0 * prob.truth()[i]) / 4.0;  // many sensors on one point
+    }
+    ASSERT_FALSE(detail::lane_costs_apply(prob));  // no layout yet: the scalar passes
+    detail::shared_lanes(prob);
+    ASSERT_TRUE(detail::lane_costs_apply(prob));
+    for (const auto* rows : {&start, &near, &stacked}) {
+      std::vector<double> x(std::size_t(prob.num_local()) * p);
+      std::copy(rows->begin(), rows->begin() + std::ptrdiff_t(n), x.begin());
+      prob.graph().halo().exchange(x.data(), p);
+      const CostTerms all = evaluate_costs(prob, x.data()), lane = detail::exact_costs(prob, x.data(), detail::kAllSums);
+      EXPECT_TRUE(same_bits(all.ml, lane.ml)) << "seed " << seed;
+      EXPECT_TRUE(same_bits(all.relaxed, lane.relaxed)) << "seed " << seed;
+      EXPECT_TRUE(same_bits(all.certificate, lane.certificate)) << "seed " << seed;
+      EXPECT_TRUE(same_bits(all.apriori, lane.apriori)) << "seed " << seed;
+      EXPECT_TRUE(same_bits(all.ml, detail::exact_costs(prob, x.data(), detail::kMlSum).ml)) << "seed " << seed;
+      EXPECT_TRUE(same_bits(all.relaxed, detail::exact_costs(prob, x.data(), detail::kRelaxedSum).relaxed));
+      for (bool relaxed : {true, false}) {
+        std::vector<double> gs(n), gl(n);
+        const double fs = ml_cost_and_gradient(prob, x.data(), gs.data(), relaxed);
+        const double fl = detail::exact_ml_cost_and_gradient(prob, x.data(), gl.data(), relaxed);
+        EXPECT_TRUE(same_bits(fs, fl)) << "seed " << seed << " relaxed " << relaxed << ": " << fs << " " << fl;
+        EXPECT_EQ(0, std::memcmp(gs.data(), gl.data(), n * sizeof(double))) << "seed " << seed << " relaxed " << relaxed;
+      }
+      ++cases;
+    }
+  }
+  EXPECT_EQ(cases, 18);
 }
 
 // Every test on the bounds where they settle it (SNL_TEST_GRADIENT_TEST=
