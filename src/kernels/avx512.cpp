@@ -105,9 +105,57 @@ SNL_AVX512 inline __m512d square_sum8(const __m512d* U, int P) {
   return s;
 }
 
+// Anchor pairs whose disk terms the relaxation step forms ahead, 8 at a time.
+constexpr int kAheadPairs = 64;
+
+// The disk terms (terms.hpp, disk_term) of anchor pairs [tb, te), te - tb <=
+// kAheadPairs, the first of them in chunk c, into T (P per pair, pair order):
+// the scalar terms' arithmetic lane by lane, so the same bits.
+template <int P>
+SNL_AVX512 void anchor_disk_terms8(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c,
+                                   std::int64_t tb, std::int64_t te, const double* w, bool ml, double* T) {
+  alignas(64) LocalId idx[kAheadPairs + 8], aidx[kAheadPairs + 8];
+  alignas(64) double rr[kAheadPairs + 8];
+  const int n = int(te - tb);
+  for (int i = 0; i < n; ++i) {
+    const std::int64_t e = tb + i;
+    while (nl.anchor_off[c + 1] <= e) ++c;
+    idx[i] = nl.first[c] + nl.anchor_q[e];
+    aidx[i] = LocalId(prob.anchor_ids()[e]);
+    rr[i] = prob.anchor_ranges()[e];
+  }
+  for (int i = n; i < ((n + 7) & ~7); ++i) {  // a partial group repeats the last pair
+    idx[i] = idx[n - 1];
+    aidx[i] = aidx[n - 1];
+    rr[i] = rr[n - 1];
+  }
+  const __m512d one = _mm512_set1_pd(1.0);
+  for (int b = 0; b < n; b += 8) {
+    __m512d z[P], a[P];
+    load_rows8<P>(w, idx + b, z);
+    load_rows8<P>(prob.anchors().data(), aidx + b, a);
+    const __m512d r = load_lanes8(rr + b);
+    for (int k = 0; k < P; ++k) z[k] = _mm512_sub_pd(z[k], a[k]);
+    const __m512d nz = _mm512_sqrt_pd(square_sum8(z, P));
+    const __mmask8 out = _mm512_cmp_pd_mask(nz, ml ? _mm512_setzero_pd() : r, _CMP_GT_OQ);
+    const __m512d cf = _mm512_sub_pd(one, _mm512_div_pd(r, nz));
+    __m512d t[P];
+    for (int k = 0; k < P; ++k) t[k] = _mm512_maskz_mul_pd(out, cf, z[k]);
+    if (b + 8 <= n) {
+      store_own8<P>(T + std::size_t(b) * P, t, false);
+    } else {
+      alignas(64) double tail[8 * P];
+      store_own8<P>(tail, t, false);
+      for (int i = 0; i < (n - b) * P; ++i) T[std::size_t(b) * P + i] = tail[i];
+    }
+  }
+}
+
 template <int P>
 SNL_AVX512 void relax_chunks_avx512(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0,
                                     std::int64_t c1, const RelaxStep& s) {
+  alignas(64) double T[kAheadPairs * P];  // anchor terms of pairs [tb, te)
+  std::int64_t tb = 0, te = 0;
   const __m512d one = _mm512_set1_pd(1.0), vL = _mm512_set1_pd(s.L), vb = _mm512_set1_pd(s.beta);
   __m512d DD = load_lanes8(s.norms), SS = load_lanes8(s.norms + 8), GS = load_lanes8(s.norms + 16);
   const bool rs = s.restart && s.inv_d;
@@ -132,10 +180,20 @@ SNL_AVX512 void relax_chunks_avx512(const LocalizationProblem& prob, const NodeL
       const __m512d cf = _mm512_sub_pd(one, _mm512_div_pd(r, nz));
       for (int k = 0; k < P; ++k) A[k] = _mm512_mask_add_pd(A[k], out, A[k], _mm512_mul_pd(cf, z[k]));
     }
-    if (nl.anchor_off[c] != nl.anchor_off[c + 1]) {
+    if (const std::int64_t e0 = nl.anchor_off[c], e1 = nl.anchor_off[c + 1]; e0 != e1) {
       alignas(64) double tmp[8 * P];
       store_own8<P>(tmp, A, false);
-      add_chunk_anchor_disk_terms<P>(prob, nl, c, s.w + i0, tmp, s.ml);
+      if (e1 - e0 > kAheadPairs) {
+        add_chunk_anchor_disk_terms<P>(prob, nl, c, s.w + i0, tmp, s.ml);
+      } else {
+        if (e1 > te) {  // the terms of the next pairs, this chunk's first
+          tb = e0;
+          te = std::min(nl.anchor_off[c1], e0 + kAheadPairs);
+          anchor_disk_terms8<P>(prob, nl, c, tb, te, s.w, s.ml, T);
+        }
+        for (std::int64_t e = e0; e < e1; ++e)  // per node in CSR order, as add_anchor_disk_terms
+          for (int k = 0; k < P; ++k) tmp[P * nl.anchor_q[e] + k] += T[std::size_t(e - tb) * P + k];
+      }
       load_own8<P>(tmp, A);
     }
     __m512d X[P], N[P], D[P], WN[P];

@@ -47,9 +47,8 @@ void add_chunk_terms(const LocalizationProblem& prob, const NodeLanes& nl, std::
   const int C = nl.lanes;
   const double* own = x + std::size_t(nl.first[c]) * P;
   for (std::int64_t g = nl.group_off[c]; g < nl.group_off[c + 1]; ++g) {
-    const unsigned mask = nl.real[g] & nl.fwd[g];
-    for (int L = 0; L < C; ++L) {
-      if (!((mask >> L) & 1)) continue;
+    for (unsigned mask = nl.real[g] & nl.fwd[g]; mask; mask &= mask - 1) {  // the forward slots
+      const int L = __builtin_ctz(mask);
       const int q = NodeLanes::lane_node(L, C);
       t.add(norm_of_difference<P>(own + P * q, x + std::size_t(nl.adj[g * C + q]) * P), nl.rho[g * C + L]);
     }
