@@ -238,6 +238,7 @@ class Solver::Run {
   std::int64_t pass_length(const Phase& ph) const;
   std::int64_t test_interval(const Phase& ph) const;
   bool test_due(const Phase& ph) const;
+  bool reduce_due(const Phase& ph) const;
   bool record_due(const Phase& ph) const;
   void iterate(Phase& ph, std::int64_t n);
   PassResult reduce(Phase& ph);
@@ -481,10 +482,31 @@ bool Solver::Run::record_due(const Phase& ph) const {
   return ph.k % every == 0 || ph.k == ph.cap;
 }
 
+// Whether this pass needs the per-pass reduction: where it tests, records or
+// ends the phase; where a checkpoint clock, a stop signal, a rule or an
+// option reads every pass (papers, --grad-tol, --target-cost,
+// --check-monotone, free-running methods); and every kFiniteEvery
+// iterations. Elsewhere the reduction would only confirm that the iterate is
+// finite, which the next of those passes does: one collective fewer per
+// iteration, and the same iterates and stops (a non-finite iterate is found
+// at most kFiniteEvery iterations later, on every rank at the same pass).
+bool Solver::Run::reduce_due(const Phase& ph) const {
+  constexpr std::int64_t kFiniteEvery = 50;
+  if (!gradient_rule() || opt_.grad_tol > 0 || opt_.target_cost > 0 || opt_.check_monotone ||
+      ph.alg->free_running() || ph.info->one_shot || ckpt_.stop_on_signal || (checkpointing_ && ckpt_.seconds > 0))
+    return true;
+  return test_due(ph) || record_due(ph) || ph.k == ph.cap || ph.k % kFiniteEvery == 0 ||
+         (checkpointing_ && ckpt_.every > 0 && ph.k % ckpt_.every == 0);
+}
+
 bool Solver::Run::pass(Phase& ph) {
   iterate(ph, pass_length(ph));
   const double t0 = MPI_Wtime();
-  PassResult r = reduce(ph);
+  PassResult r;
+  if (reduce_due(ph))
+    r = reduce(ph);
+  else
+    r.rel = NAN;
   if (gradient_rule() && r.finite && test_due(ph)) {
     r.rel_grad = relative_gradient(ph);
     ++sum_.gradient_tests;
