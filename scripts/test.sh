@@ -44,10 +44,11 @@ if [ "$SANITIZE" = 1 ]; then
   # (ghosts, halos and every collective path; the 3-rank determinism runs
   # above on the Release build), and the CLI tests of the library's error
   # paths. The long end-to-end scenarios (repeated kills, restarts, signals,
-  # option, output-fault and bad-file matrices, determinism matrices, Slurm
+  # option, output-fault and bad-file matrices, determinism matrices, the free
+  # asynchronous mode on 3 ranks with its kills and restarts, Slurm
   # jobs, the scan of every command's output for nan) ran above on the
   # Release build; under the sanitizers they would repeat the same library
   # paths many times, ten times slower. The install test builds an
   # uninstrumented consumer.
-  (cd build-asan && ctest --output-on-failure -j "$JOBS" -E "${SNL_ASAN_EXCLUDE:-[.]np3|cli.kill_restart|cli.checkpoint_restart|cli.checkpoint_options|cli.signals|cli.solve_consensus_signal|cli.option_matrix|cli.output_faults|cli.solve_determinism|cli.default_rule_determinism|cli.consensus_determinism|cli.consensus_bad_input|cli.surface_experiment|cli.surface_solve_options|cli.install_consumer|cli.no_nan|fuzz|slurm}")
+  (cd build-asan && ctest --output-on-failure -j "$JOBS" -E "${SNL_ASAN_EXCLUDE:-[.]np3|cli.kill_restart|cli.checkpoint_restart|cli.checkpoint_options|cli.signals|cli.solve_consensus_signal|cli.option_matrix|cli.output_faults|cli.async_free|cli.solve_determinism|cli.default_rule_determinism|cli.consensus_determinism|cli.consensus_bad_input|cli.surface_experiment|cli.surface_solve_options|cli.install_consumer|cli.no_nan|fuzz|slurm}")
 fi

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 
 #include "core/dim_dispatch.hpp"
 #include "core/exact_sum.hpp"
@@ -70,16 +69,14 @@ CostTerms lane_costs(const LocalizationProblem& prob, const NodeLanes& nl, const
 }  // namespace
 
 bool lane_costs_apply(const LocalizationProblem& prob) {
-  static const bool scalar = std::getenv("SNL_TEST_SCALAR_COSTS") != nullptr;
-  return !scalar && !prob.model().active() && prob.dim() >= 2 && prob.derived_cache() != nullptr;
+  return !prob.model().active() && prob.dim() >= 2 && prob.derived_cache() != nullptr;
 }
 
 CostTerms exact_costs(const LocalizationProblem& prob, const double* x, unsigned sums) {
   if (!lane_costs_apply(prob)) {
-    CostTerms c = sums == kMlSum        ? CostTerms{evaluate_ml_cost(prob, x), 0, 0, 0}
-                  : sums == kRelaxedSum ? CostTerms{0, evaluate_relaxed_cost(prob, x), 0, 0}
-                                        : evaluate_costs(prob, x);
-    return c;
+    return sums == kMlSum        ? CostTerms{evaluate_ml_cost(prob, x), 0, 0, 0}
+           : sums == kRelaxedSum ? CostTerms{0, evaluate_relaxed_cost(prob, x), 0, 0}
+                                 : evaluate_costs(prob, x);
   }
   const NodeLanes& nl = *shared_lanes(prob);
   return with_dim(prob.dim(), [&](auto P) {

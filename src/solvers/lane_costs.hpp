@@ -24,7 +24,7 @@ CostTerms exact_costs(const LocalizationProblem& prob, const double* x, unsigned
 /// would not use the layout, ml_cost_and_gradient itself.
 double exact_ml_cost_and_gradient(const LocalizationProblem& prob, const double* x, double* g, bool relaxed);
 
-/// Whether the two above run on the lane layout (SNL_TEST_SCALAR_COSTS=1: never).
+/// Whether the two above run on the lane layout (plain l2, 2D or 3D, the layout built).
 bool lane_costs_apply(const LocalizationProblem& prob);
 
 }  // namespace snl::detail

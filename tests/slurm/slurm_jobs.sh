@@ -53,6 +53,17 @@ submit_wait() {
   echo "${out%%;*}"
 }
 job_field() { scontrol -o show job "$1" | tr ' ' '\n' | sed -n "s/^$2=//p" | head -1; }
+# A job's state once it has left COMPLETING (sbatch --wait returns when the
+# batch script ends; Slurm may still be completing the job's steps then).
+final_state() {
+  local s i
+  for i in $(seq 60); do
+    s=$(job_field "$1" JobState)
+    [ "$s" = COMPLETING ] || break
+    sleep 1
+  done
+  echo "$s"
+}
 same_positions() { h5diff "$1" "$2" /positions /positions > /dev/null || fail "$3: positions differ ($1 vs $2)"; }
 
 # ---- a) solve.sbatch on 2 tasks equals a direct 2-rank run.
@@ -62,7 +73,7 @@ for launcher in mpirun srun; do
   id=$(submit_wait 120 --ntasks=2 --time=5 -o "a_$launcher.log" \
     --export="ALL,SNL=$SNL,NET=$NET,OUT=$T/a_$launcher.h5,MAXITER=3000,TOL=1e-6,LAUNCHER=$launcher" \
     "$SRC/jobs/solve.sbatch") || exit 1
-  [ "$(job_field "$id" JobState)" = COMPLETED ] || fail "solve job ($launcher) state $(job_field "$id" JobState)"
+  [ "$(final_state "$id")" = COMPLETED ] || fail "solve job ($launcher) state $(final_state "$id")"
   [ -f "a_$launcher.ckpt.h5" ] || true  # --checkpoint-seconds 600: none for a short run
   same_positions direct.h5 "a_$launcher.h5" "solve.sbatch with $launcher"
   step "a) solve.sbatch ($launcher inside the allocation) == direct mpirun -np 2"
@@ -125,7 +136,7 @@ id=$(submit_wait 900 --ntasks=2 --time=2 --signal=B:USR1@40 -o b.log \
 restarts=$(job_field "$id" Restarts)
 step "b) time-limited job $id finished after $restarts requeues"
 grep '^snl-solve:' b.log
-[ "$(job_field "$id" JobState)" = COMPLETED ] || fail "time-limited job state $(job_field "$id" JobState)"
+[ "$(final_state "$id")" = COMPLETED ] || fail "time-limited job state $(final_state "$id")"
 if [ "${restarts:-0}" -eq 0 ]; then
   grep -q 'stopped by a signal' b.log && fail "the job was stopped by Slurm's signal but not requeued"
   fail "the time-limited job was never signalled"
