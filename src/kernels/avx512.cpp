@@ -229,10 +229,13 @@ SNL_AVX512 void relax_chunks_avx512(const LocalizationProblem& prob, const NodeL
 }
 
 // Extrap: mm-accel's extrapolated edge variables ya + beta (ya - yb), formed
-// on the fly, the result stored to y (as mm_chunks_avx2).
-template <int P, bool Extrap = false>
-SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0,
-                                 std::int64_t c1, const MMStep& s) {
+// on the fly, the result stored to y (as mm_chunks_avx2). Cost (with
+// Extrap): each chunk's acceptance costs of (x, ya) as well
+// (MMStep::cost_F), mm_cost_chunk_avx512_p's arithmetic on the rows and
+// edge variables the step has loaded anyway, so the same bits.
+template <int P, bool Extrap = false, bool Cost = false>
+SNL_AVX512 void mm_chunks_avx512_impl(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0,
+                                      std::int64_t c1, const MMStep& s) {
   const __m512d minus_one = _mm512_set1_pd(-1.0), zero = _mm512_setzero_pd();
   const __m512d vkeep = _mm512_set1_pd(s.keep), vinvL = _mm512_set1_pd(s.invL), vbeta = _mm512_set1_pd(s.beta);
   __m512d DD = load_lanes8(s.norms), SS = load_lanes8(s.norms + 8);
@@ -240,14 +243,18 @@ SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& prob, const NodeLane
   for (std::int64_t c = c0; c < c1; ++c) {
     const LocalId v0 = nl.first[c];
     const std::size_t i0 = std::size_t(v0) * P;
-    __m512d V[P], A[P];
+    __m512d V[P], A[P], XV[P];
     load_own8<P>(s.x + i0, V);
+    if constexpr (Cost)
+      for (int k = 0; k < P; ++k) XV[k] = V[k];  // the candidate's own rows
     if (Extrap && s.xb) {  // x + beta (x - xb), as the blend pass
       __m512d B[P];
       load_own8<P>(s.xb + i0, B);
       for (int k = 0; k < P; ++k) V[k] = _mm512_add_pd(V[k], _mm512_mul_pd(vbeta, _mm512_sub_pd(V[k], B[k])));
     }
     for (int k = 0; k < P; ++k) A[k] = _mm512_setzero_pd();
+    __m512d SF = zero, Sf = zero;  // Cost: the chunk's sums
+    unsigned any = 0;
     for (std::int64_t g = nl.group_off[c]; g < nl.group_off[c + 1]; ++g) {
       if constexpr (Extrap) {
         prefetch_group<8, P>(nl, g, last, s.ya);
@@ -257,8 +264,10 @@ SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& prob, const NodeLane
         prefetch_group<8, P>(nl, g, last, s.y);
       }
       prefetch_rows<8, P>(nl, g, last, s.x);
-      __m512d U[P], dz[P], yn[P];
+      __m512d U[P], dz[P], yn[P], Z[P];
       load_rows8<P>(s.x, nl.adj.data() + 8 * g, U);
+      if constexpr (Cost)
+        for (int k = 0; k < P; ++k) Z[k] = _mm512_sub_pd(XV[k], U[k]);
       if (Extrap && s.xb) {
         __m512d B[P];
         load_rows8<P>(s.xb, nl.adj.data() + 8 * g, B);
@@ -267,11 +276,17 @@ SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& prob, const NodeLane
       const __m512d r = _mm512_loadu_pd(nl.rho.data() + 8 * g);
       const __mmask8 re = nl.real[g], fw = nl.fwd[g], bw = static_cast<__mmask8>(~fw);
       double* yg = s.y + 8 * P * g;
+      __m512d S = zero, Z2 = zero;  // Cost: as mm_cost_chunk_avx512_p
       for (int k = 0; k < P; ++k) {
         dz[k] = _mm512_mask_sub_pd(_mm512_sub_pd(U[k], V[k]), fw, V[k], U[k]);
         __m512d Y;
         if constexpr (Extrap) {  // a + beta (a - b), as the blend pass
           const __m512d Ya = _mm512_loadu_pd(s.ya + 8 * P * g + 8 * k);
+          if constexpr (Cost) {
+            const __m512d R = _mm512_sub_pd(Z[k], Ya);
+            S = _mm512_add_pd(S, _mm512_mul_pd(R, R));
+            Z2 = _mm512_add_pd(Z2, _mm512_mul_pd(Z[k], Z[k]));
+          }
           Y = _mm512_add_pd(Ya, _mm512_mul_pd(vbeta, _mm512_sub_pd(Ya, _mm512_loadu_pd(s.yb + 8 * P * g + 8 * k))));
         } else {
           Y = _mm512_loadu_pd(yg + 8 * k);
@@ -280,6 +295,13 @@ SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& prob, const NodeLane
         t = _mm512_mask_mul_pd(t, bw, t, minus_one);  // sgn (dz - y): 1.0 * t is t
         A[k] = _mm512_mask_add_pd(A[k], re, A[k], t);
         yn[k] = _mm512_add_pd(_mm512_mul_pd(vkeep, Y), _mm512_mul_pd(vinvL, dz[k]));
+      }
+      if constexpr (Cost) {  // the forward real slots (+0.0 from the others changes no sum)
+        const __mmask8 M = static_cast<__mmask8>(re & fw);
+        any |= M;
+        const __m512d Mf = _mm512_sub_pd(_mm512_sqrt_pd(Z2), r);
+        SF = _mm512_add_pd(SF, _mm512_maskz_mov_pd(M, S));
+        Sf = _mm512_add_pd(Sf, _mm512_maskz_mov_pd(M, _mm512_mul_pd(Mf, Mf)));
       }
       const __m512d nv = _mm512_sqrt_pd(square_sum8(yn, P));
       const __mmask8 pos = _mm512_cmp_pd_mask(nv, zero, _CMP_GT_OQ);
@@ -311,10 +333,25 @@ SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& prob, const NodeLane
     store_own8<P>(s.xn + i0, X, s.stream);
     for (int k = 0; k < P; ++k) DD = _mm512_add_pd(DD, _mm512_mul_pd(D[k], D[k]));
     for (int k = 0; k < P; ++k) SS = _mm512_add_pd(SS, _mm512_mul_pd(X[k], X[k]));
+    if constexpr (Cost) {
+      const std::size_t q = std::size_t(c - s.cost_base);
+      _mm512_storeu_pd(s.cost_F + 8 * q, SF);
+      _mm512_storeu_pd(s.cost_f + 8 * q, Sf);
+      s.cost_any[q] = any;
+    }
   }
   store_lanes8(s.norms, DD);
   store_lanes8(s.norms + 8, SS);
   _mm_sfence();
+}
+
+template <int P, bool Extrap = false>
+SNL_AVX512 void mm_chunks_avx512(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0,
+                                 std::int64_t c1, const MMStep& s) {
+  if (Extrap && s.cost_F)
+    mm_chunks_avx512_impl<P, Extrap, true>(prob, nl, c0, c1, s);
+  else
+    mm_chunks_avx512_impl<P, Extrap, false>(prob, nl, c0, c1, s);
 }
 
 // mm_cost_chunk_avx2_p with 8 lanes: the MM kernel's row loads (lane order

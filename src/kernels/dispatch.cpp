@@ -98,9 +98,24 @@ void relax_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int
 
 void mm_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
                const MMStep& s) {
-  if (s.ya)
+  if (s.ya) {
+    if (s.cost_F) {  // the chunks whose costs the step does not sum itself (the AVX-512 kernel's full ones)
+#ifdef SNL_HAVE_AVX2_PATH
+      const bool fused = simd_table(nl.lanes) == &kAvx512Kernels && prob.dim() >= 2;
+#else
+      const bool fused = false;
+#endif
+      const int C = nl.lanes;
+      for (std::int64_t c = c0; c < c1; ++c) {
+        if (fused && nl.count[c] == C) continue;
+        const std::size_t q = std::size_t(c - s.cost_base);
+        std::fill(s.cost_F + C * q, s.cost_F + C * (q + 1), 0.0);
+        std::fill(s.cost_f + C * q, s.cost_f + C * (q + 1), 0.0);
+        s.cost_any[q] = mm_cost_chunk(nl, prob.dim(), c, s.x, s.ya, s.cost_F + C * q, s.cost_f + C * q);
+      }
+    }
     run_chunks<&KernelTable::mm_extrapolated>(prob, nl, c0, c1, s);
-  else
+  } else
     run_chunks<&KernelTable::mm>(prob, nl, c0, c1, s);
 }
 

@@ -251,6 +251,17 @@ struct MMStep {
   /// does not read: without them every line of y is read for ownership
   /// first, a third more traffic on y; stream_rows of y's bytes).
   bool stream_y = false;
+  /// With ya: where cost_F is set, each chunk c's mm_cost_chunk(nl, p, c, x,
+  /// ya) as well (the candidate's acceptance costs, of x and ya themselves,
+  /// not of their extrapolation): its F and f lane sums into cost_F and
+  /// cost_f at [(c - cost_base) C, + C) and its lanes mask into
+  /// cost_any[c - cost_base]. The AVX-512 kernel sums them from the rows and
+  /// edge variables its step loads anyway (one pass instead of two); the
+  /// other paths call mm_cost_chunk. The same bits either way.
+  double* cost_F = nullptr;
+  double* cost_f = nullptr;
+  unsigned* cost_any = nullptr;
+  std::int64_t cost_base = 0;
 };
 void mm_chunks(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0, std::int64_t c1,
                const MMStep& s);

@@ -81,6 +81,9 @@ class LaneCore {
       : prob_(prob), L_(2.0 * prob.max_degree() + prob.max_anchor_degree() + 2.0) {
     lanes_ = detail::shared_lanes(prob);
     norms_.assign(2 * detail::kMaxLanes, 0.0);
+    block_F_.assign(std::size_t(kCacheChunks) * detail::kMaxLanes, 0.0);
+    block_f_.assign(block_F_.size(), 0.0);
+    block_any_.assign(std::size_t(kCacheChunks), 0);
   }
   double lipschitz() const { return L_; }
   std::size_t y_size() const { return std::size_t(lanes_->groups()) * lanes_->lanes * prob_.dim(); }
@@ -90,7 +93,11 @@ class LaneCore {
   }
   std::int64_t chunks() const { return lanes_->size(); }
   std::int64_t split() const { return lanes_->split; }  // chunks [0, split) need no ghost row
-  std::int64_t bytes() const { return (lanes_ ? lanes_->bytes() : 0) + std::int64_t(sizeof(double) * norms_.capacity()); }
+  std::int64_t bytes() const {
+    return (lanes_ ? lanes_->bytes() : 0) +
+           std::int64_t(sizeof(double) * (norms_.capacity() + block_F_.capacity() + block_f_.capacity()) +
+                        sizeof(unsigned) * block_any_.capacity());
+  }
 
   void init(const double* x, double* y, double* w) const {
     detail::with_dim(prob_.dim(), [&](auto P) { init_p<decltype(P)::value>(x, y, w); });
@@ -107,16 +114,31 @@ class LaneCore {
   // variables and rows the cost terms have just brought into cache: one
   // stream over y instead of two. The step's arithmetic per chunk is the
   // whole-range step's, so the iterates are the same bits.
+  // The step sums the chunks' edge terms itself (MMStep::cost_F: it loads
+  // the same rows and edge variables), into the block's buffers; the anchor
+  // terms and the per-node adds follow, in add_terms' order.
   void terms_and_step(const double* x, const double* y, const double* w, std::int64_t c0, std::int64_t c1,
                       detail::ExactSum* F, bool exact, const StepArgs& a, bool /*boundary*/) {
-    const detail::MMStep st = step_args(a);
+    detail::MMStep st = step_args(a);
+    const bool fuse = st.ya == y && st.x == x;  // the step's candidate is the point summed
     for (std::int64_t b = c0; b < c1; b += kCacheChunks) {
       const std::int64_t e = std::min(c1, b + kCacheChunks);
-      if (exact)
-        add_terms(x, y, w, b, e, F);
-      else
-        add_terms_plain(x, y, w, b, e, F);
-      detail::mm_chunks(prob_, *lanes_, b, e, st);
+      if (fuse) {
+        st.cost_F = block_F_.data();
+        st.cost_f = block_f_.data();
+        st.cost_any = block_any_.data();
+        st.cost_base = b;
+        detail::mm_chunks(prob_, *lanes_, b, e, st);
+      }
+      const EdgeSums sums{block_F_.data(), block_f_.data(), block_any_.data(), b};
+      detail::with_dim(prob_.dim(), [&](auto P) {
+        constexpr int p = decltype(P)::value;
+        if (exact)
+          add_terms_p<p, true>(x, y, w, b, e, F, fuse ? &sums : nullptr);
+        else
+          add_terms_p<p, false>(x, y, w, b, e, F, fuse ? &sums : nullptr);
+      });
+      if (!fuse) detail::mm_chunks(prob_, *lanes_, b, e, st);
     }
   }
   detail::MMStep step_args(const StepArgs& a) {
@@ -151,6 +173,13 @@ class LaneCore {
   // Chunks per block of terms_and_step: their edge variables (a few KiB a
   // chunk) stay in the core's L2 between the two kernels.
   static constexpr std::int64_t kCacheChunks = 64;
+  // A block's per-chunk edge sums, as mm_cost_chunk gives them (chunk c at c - base).
+  struct EdgeSums {
+    const double* F;
+    const double* f;
+    const unsigned* any;
+    std::int64_t base;
+  };
   template <int P>
   void init_p(const double* x, double* yv, double* wv) const {
     detail::best_edge_variables<P>(prob_, x, [&](LocalId v, std::int64_t e, int c) { return &yv[y_index(v, e, c)]; },
@@ -173,9 +202,10 @@ class LaneCore {
   // Exact: each node's terms enter the exact accumulators; otherwise plain
   // block sums do (add_terms_plain), flushed before a lane's block would pass
   // kBlockAdds adds (a chunk's anchor terms go to lane 0).
+  // pre: the chunks' edge sums already formed (by the step), else mm_cost_chunk's.
   template <int P, bool Exact>
   void add_terms_p(const double* x, const double* y, const double* w, std::int64_t c0, std::int64_t c1,
-                   detail::ExactSum* F) const {
+                   detail::ExactSum* F, const EdgeSums* pre = nullptr) const {
     const int C = lanes_->lanes;
     detail::ExactSum accF[detail::kMaxLanes], accf[detail::kMaxLanes];
     double blkF[detail::kMaxLanes] = {}, blkf[detail::kMaxLanes] = {};
@@ -206,7 +236,15 @@ class LaneCore {
         adds += here;
       }
       double nodeF[detail::kMaxLanes] = {}, nodef[detail::kMaxLanes] = {};
-      const unsigned any = detail::mm_cost_chunk(*lanes_, P, c, x, y, nodeF, nodef);
+      unsigned any;
+      if (pre) {
+        const std::size_t q = std::size_t(c - pre->base);
+        any = pre->any[q];
+        std::copy(pre->F + C * q, pre->F + C * (q + 1), nodeF);
+        std::copy(pre->f + C * q, pre->f + C * (q + 1), nodef);
+      } else {
+        any = detail::mm_cost_chunk(*lanes_, P, c, x, y, nodeF, nodef);
+      }
       for (int L = 0; L < C; ++L)
         if ((any >> L) & 1) put(L, 0.5 * nodeF[L], 0.5 * nodef[L]);
       for (LocalId v = lanes_->first[c]; v < lanes_->first[c] + lanes_->count[c]; ++v)
@@ -233,6 +271,8 @@ class LaneCore {
   double L_;
   std::shared_ptr<const detail::NodeLanes> lanes_;  // the phases share one (detail::shared_lanes)
   std::vector<double> norms_;  // the kernel's per-lane norms (unused: the solver sums the change itself)
+  std::vector<double> block_F_, block_f_;  // terms_and_step: a block's edge sums (EdgeSums)
+  std::vector<unsigned> block_any_;
 };
 
 // Weights and/or Huber: ModelMM's step and surrogate (model_mm.hpp); y per

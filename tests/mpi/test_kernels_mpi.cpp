@@ -422,6 +422,72 @@ TEST_P(KernelsByDim, MMCostChunkSumsEachNodesForwardSlotsInOrder) {
 // same bits as part by part. The interior's partial last chunk must not go
 // through the SIMD kernel, whose extra lanes would step the next nodes'
 // anchor variables a second time.
+// mm-accel's pass (MMStep::cost_F): the extrapolating step, called a block
+// of chunks at a time as the solver does, also gives each chunk's acceptance
+// costs of (x, ya), the bits of mm_cost_chunk on the same chunk, with the
+// same lanes mask, on the scalar and the SIMD path (the AVX-512 kernel sums
+// them itself), and takes the same step as without them.
+TEST_P(KernelsByDim, ExtrapolatingMMStepSumsTheCandidatesCosts) {
+  std::mt19937_64 gen(17);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const auto x = awkward_rows(prob, 7);
+  std::vector<double> xprev(x.size());
+  for (auto& v : xprev) v = u(gen);
+  std::vector<double> ya(std::size_t(nl.groups()) * nl.lanes * dim), yb(ya.size()),
+      aw0(prob.anchor_ranges().size() * dim);
+  for (auto& v : ya) v = u(gen);
+  for (auto& v : yb) v = u(gen);
+  for (auto& v : aw0) v = u(gen);
+  const int C = nl.lanes;
+  const std::int64_t block = 5;  // blocks cross the interior/boundary split and end in partial chunks
+  for (int path = 0; path < 2; ++path) {
+    if (path == 1 && !have_simd()) continue;
+    const bool had = detail::set_simd_enabled(path == 1);
+    auto step = [&](bool costs, std::vector<double>* y, std::vector<double>* xn, std::vector<double>* F,
+                    std::vector<double>* f, std::vector<unsigned>* any) {
+      y->assign(ya.size(), -3.0);
+      std::vector<double> aw = aw0, norms(16, 0.0);
+      xn->assign(x.size(), -7.0);
+      F->assign(std::size_t(nl.size()) * C, -5.0);
+      f->assign(F->size(), -5.0);
+      any->assign(std::size_t(nl.size()), 999);
+      detail::MMStep st{x.data(), xn->data(), y->data(), aw.data(), 0.9, 0.1, norms.data(), false};
+      st.ya = ya.data();
+      st.yb = yb.data();
+      st.xb = xprev.data();
+      st.beta = 0.6;
+      for (std::int64_t b = 0; b < nl.size(); b += block) {
+        if (costs) {
+          st.cost_F = F->data() + b * C;
+          st.cost_f = f->data() + b * C;
+          st.cost_any = any->data() + b;
+          st.cost_base = b;
+        }
+        detail::mm_chunks(prob, nl, b, std::min(nl.size(), b + block), st);
+      }
+    };
+    std::vector<double> y1, x1, F1, f1, y0, x0, F0, f0;
+    std::vector<unsigned> any1, any0;
+    step(true, &y1, &x1, &F1, &f1, &any1);
+    step(false, &y0, &x0, &F0, &f0, &any0);
+    EXPECT_TRUE(same_bits(x1, x0)) << "path " << path;
+    EXPECT_TRUE(same_bits(y1, y0)) << "path " << path;
+    int differs = 0, counted = 0;
+    for (std::int64_t c = 0; c < nl.size(); ++c) {
+      double F[detail::kMaxLanes] = {}, f[detail::kMaxLanes] = {};
+      const unsigned any = detail::mm_cost_chunk(nl, dim, c, x.data(), ya.data(), F, f);
+      differs += any1[c] != any;
+      for (int L = 0; L < C; ++L) {
+        differs += !same_bits(F1[c * C + L], F[L]) || !same_bits(f1[c * C + L], f[L]);
+        counted += (any >> L) & 1;
+      }
+    }
+    detail::set_simd_enabled(had);
+    EXPECT_EQ(differs, 0) << "path " << path;
+    EXPECT_GT(3 * counted, prob.num_owned()) << "path " << path;
+  }
+}
+
 TEST_P(KernelsByDim, OneMMCallOverBothPartsEqualsPartByPart) {
   std::mt19937_64 gen(11);
   std::uniform_real_distribution<double> u(-1, 1);
