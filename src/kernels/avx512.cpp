@@ -228,11 +228,32 @@ SNL_AVX512 void relax_chunks_avx512(const LocalizationProblem& prob, const NodeL
   _mm_sfence();  // order the non-temporal stores before what follows
 }
 
+// One group's acceptance-cost terms (mm_cost_chunk): with Z = x_v - x_u per
+// coordinate and Y the edge variables (kY), |Z - Y|^2 into SF and (|Z| -
+// rho)^2 into Sf, on the lanes in M (forward real slots); the others add
+// +0.0, which changes no sum. The MM step's fused form and
+// mm_cost_chunk_avx512_p share it: the same bits.
+template <int P, bool kY>
+SNL_AVX512 inline void add_edge_costs8(const __m512d* Z, const __m512d* Y, __m512d r, __mmask8 M, __m512d& SF,
+                                       __m512d& Sf) {
+  __m512d S = _mm512_setzero_pd(), Z2 = _mm512_setzero_pd();
+  for (int k = 0; k < P; ++k) {
+    if (kY) {
+      const __m512d R = _mm512_sub_pd(Z[k], Y[k]);
+      S = _mm512_add_pd(S, _mm512_mul_pd(R, R));
+    }
+    Z2 = _mm512_add_pd(Z2, _mm512_mul_pd(Z[k], Z[k]));
+  }
+  const __m512d Mf = _mm512_sub_pd(_mm512_sqrt_pd(Z2), r);
+  SF = _mm512_add_pd(SF, _mm512_maskz_mov_pd(M, S));
+  Sf = _mm512_add_pd(Sf, _mm512_maskz_mov_pd(M, _mm512_mul_pd(Mf, Mf)));
+}
+
 // Extrap: mm-accel's extrapolated edge variables ya + beta (ya - yb), formed
 // on the fly, the result stored to y (as mm_chunks_avx2). Cost (with
 // Extrap): each chunk's acceptance costs of (x, ya) as well
-// (MMStep::cost_F), mm_cost_chunk_avx512_p's arithmetic on the rows and
-// edge variables the step has loaded anyway, so the same bits.
+// (MMStep::cost_F), add_edge_costs8 on the rows and edge variables the step
+// has loaded anyway.
 template <int P, bool Extrap = false, bool Cost = false>
 SNL_AVX512 void mm_chunks_avx512_impl(const LocalizationProblem& prob, const NodeLanes& nl, std::int64_t c0,
                                       std::int64_t c1, const MMStep& s) {
@@ -276,17 +297,12 @@ SNL_AVX512 void mm_chunks_avx512_impl(const LocalizationProblem& prob, const Nod
       const __m512d r = _mm512_loadu_pd(nl.rho.data() + 8 * g);
       const __mmask8 re = nl.real[g], fw = nl.fwd[g], bw = static_cast<__mmask8>(~fw);
       double* yg = s.y + 8 * P * g;
-      __m512d S = zero, Z2 = zero;  // Cost: as mm_cost_chunk_avx512_p
+      __m512d YA[P];  // Cost: the candidate's edge variables
       for (int k = 0; k < P; ++k) {
         dz[k] = _mm512_mask_sub_pd(_mm512_sub_pd(U[k], V[k]), fw, V[k], U[k]);
         __m512d Y;
         if constexpr (Extrap) {  // a + beta (a - b), as the blend pass
-          const __m512d Ya = _mm512_loadu_pd(s.ya + 8 * P * g + 8 * k);
-          if constexpr (Cost) {
-            const __m512d R = _mm512_sub_pd(Z[k], Ya);
-            S = _mm512_add_pd(S, _mm512_mul_pd(R, R));
-            Z2 = _mm512_add_pd(Z2, _mm512_mul_pd(Z[k], Z[k]));
-          }
+          const __m512d Ya = YA[k] = _mm512_loadu_pd(s.ya + 8 * P * g + 8 * k);
           Y = _mm512_add_pd(Ya, _mm512_mul_pd(vbeta, _mm512_sub_pd(Ya, _mm512_loadu_pd(s.yb + 8 * P * g + 8 * k))));
         } else {
           Y = _mm512_loadu_pd(yg + 8 * k);
@@ -296,12 +312,10 @@ SNL_AVX512 void mm_chunks_avx512_impl(const LocalizationProblem& prob, const Nod
         A[k] = _mm512_mask_add_pd(A[k], re, A[k], t);
         yn[k] = _mm512_add_pd(_mm512_mul_pd(vkeep, Y), _mm512_mul_pd(vinvL, dz[k]));
       }
-      if constexpr (Cost) {  // the forward real slots (+0.0 from the others changes no sum)
+      if constexpr (Cost) {
         const __mmask8 M = static_cast<__mmask8>(re & fw);
         any |= M;
-        const __m512d Mf = _mm512_sub_pd(_mm512_sqrt_pd(Z2), r);
-        SF = _mm512_add_pd(SF, _mm512_maskz_mov_pd(M, S));
-        Sf = _mm512_add_pd(Sf, _mm512_maskz_mov_pd(M, _mm512_mul_pd(Mf, Mf)));
+        add_edge_costs8<P, true>(Z, YA, r, M, SF, Sf);
       }
       const __m512d nv = _mm512_sqrt_pd(square_sum8(yn, P));
       const __mmask8 pos = _mm512_cmp_pd_mask(nv, zero, _CMP_GT_OQ);
@@ -371,19 +385,13 @@ SNL_AVX512 unsigned mm_cost_chunk_avx512_p(const NodeLanes& nl, std::int64_t c, 
     const __mmask8 M = static_cast<__mmask8>(nl.real[g] & nl.fwd[g]);
     if (!M) continue;
     any |= M;
-    __m512d S = _mm512_setzero_pd(), Z2 = _mm512_setzero_pd(), U[P];
+    __m512d U[P], Z[P], Y[P];
     load_rows8<P>(x, &nl.adj[g * 8], U);
     for (int k = 0; k < P; ++k) {
-      const __m512d Z = _mm512_sub_pd(XV[k], U[k]);
-      if (kY) {
-        const __m512d R = _mm512_sub_pd(Z, _mm512_loadu_pd(y + std::size_t(g * P + k) * 8));
-        S = _mm512_add_pd(S, _mm512_mul_pd(R, R));
-      }
-      Z2 = _mm512_add_pd(Z2, _mm512_mul_pd(Z, Z));
+      Z[k] = _mm512_sub_pd(XV[k], U[k]);
+      if (kY) Y[k] = _mm512_loadu_pd(y + std::size_t(g * P + k) * 8);
     }
-    const __m512d Mf = _mm512_sub_pd(_mm512_sqrt_pd(Z2), _mm512_loadu_pd(&nl.rho[g * 8]));
-    SF = _mm512_add_pd(SF, _mm512_maskz_mov_pd(M, S));
-    Sf = _mm512_add_pd(Sf, _mm512_maskz_mov_pd(M, _mm512_mul_pd(Mf, Mf)));
+    add_edge_costs8<P, kY>(Z, Y, _mm512_loadu_pd(&nl.rho[g * 8]), M, SF, Sf);
   }
   _mm512_storeu_pd(F, _mm512_add_pd(_mm512_loadu_pd(F), SF));
   _mm512_storeu_pd(f, _mm512_add_pd(_mm512_loadu_pd(f), Sf));
