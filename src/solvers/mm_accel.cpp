@@ -108,37 +108,31 @@ class LaneCore {
   static constexpr bool kExtrapolates = true;
   void step(const StepArgs& a) { detail::mm_chunks(prob_, *lanes_, 0, lanes_->size(), step_args(a)); }
   // Chunks [c0, c1) of one pass: F and f of z = (x, y, w) into F (exactly or
-  // in plain block sums), and the extrapolating step from v with ya = y (the
-  // candidate's edge variables, read once for both) and yb into the step's
-  // buffers. Taken a few chunks at a time, so that the step reads the edge
-  // variables and rows the cost terms have just brought into cache: one
-  // stream over y instead of two. The step's arithmetic per chunk is the
-  // whole-range step's, so the iterates are the same bits.
-  // The step sums the chunks' edge terms itself (MMStep::cost_F: it loads
-  // the same rows and edge variables), into the block's buffers; the anchor
-  // terms and the per-node adds follow, in add_terms' order.
+  // in plain block sums), and the extrapolating step from v = x with ya = y
+  // (the candidate, as pass() calls it) and yb into the step's buffers. The
+  // step sums the chunks' edge terms itself (MMStep::cost_F: it loads the
+  // same rows and edge variables), a block of chunks at a time into the
+  // block's buffers; the anchor terms and the per-node adds follow, in
+  // add_terms' order. The step's arithmetic per chunk is the whole-range
+  // step's, so the iterates are the same bits.
   void terms_and_step(const double* x, const double* y, const double* w, std::int64_t c0, std::int64_t c1,
                       detail::ExactSum* F, bool exact, const StepArgs& a, bool /*boundary*/) {
     detail::MMStep st = step_args(a);
-    const bool fuse = st.ya == y && st.x == x;  // the step's candidate is the point summed
+    st.cost_F = block_F_.data();
+    st.cost_f = block_f_.data();
+    st.cost_any = block_any_.data();
     for (std::int64_t b = c0; b < c1; b += kCacheChunks) {
       const std::int64_t e = std::min(c1, b + kCacheChunks);
-      if (fuse) {
-        st.cost_F = block_F_.data();
-        st.cost_f = block_f_.data();
-        st.cost_any = block_any_.data();
-        st.cost_base = b;
-        detail::mm_chunks(prob_, *lanes_, b, e, st);
-      }
+      st.cost_base = b;
+      detail::mm_chunks(prob_, *lanes_, b, e, st);
       const EdgeSums sums{block_F_.data(), block_f_.data(), block_any_.data(), b};
       detail::with_dim(prob_.dim(), [&](auto P) {
         constexpr int p = decltype(P)::value;
         if (exact)
-          add_terms_p<p, true>(x, y, w, b, e, F, fuse ? &sums : nullptr);
+          add_terms_p<p, true>(x, y, w, b, e, F, &sums);
         else
-          add_terms_p<p, false>(x, y, w, b, e, F, fuse ? &sums : nullptr);
+          add_terms_p<p, false>(x, y, w, b, e, F, &sums);
       });
-      if (!fuse) detail::mm_chunks(prob_, *lanes_, b, e, st);
     }
   }
   detail::MMStep step_args(const StepArgs& a) {
